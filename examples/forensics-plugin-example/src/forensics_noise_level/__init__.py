@@ -1,0 +1,1 @@
+"""Example forensics plugin: the photo's sensor noise level, globally and per block."""

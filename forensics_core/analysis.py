@@ -1,0 +1,320 @@
+"""Run the selected detectors on one photo and assemble its findings.
+
+Each detector runs in a forked child process by default: a hang is ended at
+the time limit, a crash (even a segfault in native code) costs only that
+detector, and nothing the plugin does can alter the parent's copy of the
+evidence. Where ``fork`` is unavailable, or with ``isolation="inline"``, the
+detector runs in a thread of this process; a time limit is then reported but
+the runaway thread cannot be stopped.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import platform
+import threading
+import time
+import traceback
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from importlib.metadata import PackageNotFoundError, version
+from typing import Any
+
+from . import __version__
+from .evidence import DEFAULT_MAX_PIXELS, Evidence, load_evidence
+from .findings import (
+    SCHEMA_VERSION,
+    DetectorFinding,
+    DetectorResult,
+    Findings,
+    MalformedResult,
+    Status,
+    Tool,
+    Verdict,
+    VerdictLabel,
+    check_result,
+    to_jsonable,
+)
+from .fusion import POLICY as DEFAULT_FUSION
+from .plugins import PluginHost, one_line
+
+DEFAULT_TIMEOUT_S = 300.0
+ISOLATIONS = ("process", "inline")
+_ENV_PACKAGES = ("numpy", "scipy", "scikit-image", "pillow", "pluggy", "numba")
+
+
+@dataclass(frozen=True)
+class Options:
+    """How an analysis runs; recorded as ``parameters`` in the findings.
+
+    Parameters
+    ----------
+    detectors : sequence of str or None
+        Detector names to run; None runs every registered detector.
+    timeout_s : float
+        Wall-clock limit per detector, seconds.
+    max_pixels : int
+        Pixel-count limit of the intake (decompression bombs).
+    fusion : str
+        Name of the fusion policy.
+    isolation : {"process", "inline"}
+    detector_params : mapping of str to mapping
+        Per-detector overrides of the default parameters.
+    case_id, examiner : str or None
+        Case information carried into the findings.
+    """
+
+    detectors: Sequence[str] | None = None
+    timeout_s: float = DEFAULT_TIMEOUT_S
+    max_pixels: int = DEFAULT_MAX_PIXELS
+    fusion: str = DEFAULT_FUSION
+    isolation: str = "process"
+    detector_params: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    case_id: str | None = None
+    examiner: str | None = None
+
+
+def _now() -> str:
+    return datetime.now(timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z")
+
+
+def _environment() -> dict[str, Any]:
+    packages = {}
+    for name in _ENV_PACKAGES:
+        try:
+            packages[name] = version(name)
+        except PackageNotFoundError:
+            packages[name] = None
+    return {
+        "python": platform.python_version(),
+        "implementation": platform.python_implementation(),
+        "platform": platform.platform(),
+        "machine": platform.machine(),
+        "packages": packages,
+    }
+
+
+def resolve_params(host: PluginHost, options: Options) -> dict[str, dict[str, Any]]:
+    """Each selected detector's defaults merged with the user's overrides.
+
+    Raises
+    ------
+    ValueError
+        For overrides of a detector that does not exist or of a parameter the
+        detector does not declare: a misspelt parameter must not pass silently.
+    """
+    selected = list(options.detectors) if options.detectors is not None else sorted(host.detectors)
+    for name, overrides in options.detector_params.items():
+        if name not in host.detectors:
+            raise ValueError(f"parameters given for unknown detector {name!r}")
+        unknown = sorted(set(overrides) - set(host.detectors[name].spec.default_params))
+        if unknown:
+            known = ", ".join(sorted(host.detectors[name].spec.default_params)) or "none"
+            raise ValueError(f"{name} has no parameter {', '.join(unknown)} (known: {known})")
+    return {
+        name: {**host.detectors[name].spec.default_params, **options.detector_params.get(name, {})}
+        for name in selected
+        if name in host.detectors
+    }
+
+
+def _child(call: Callable[[], Any], conn) -> None:
+    try:
+        outcome = ("value", call())
+    except BaseException as exc:
+        outcome = ("error", one_line(exc), traceback.format_exc())
+    try:
+        conn.send(outcome)
+    except Exception as exc:
+        conn.send(("error", f"result could not be passed back: {one_line(exc)}", ""))
+    finally:
+        conn.close()
+
+
+def _run_forked(call: Callable[[], Any], timeout_s: float) -> tuple:
+    ctx = multiprocessing.get_context("fork")
+    receiver, sender = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_child, args=(call, sender), daemon=True)
+    proc.start()
+    sender.close()
+    try:
+        if not receiver.poll(timeout_s):
+            proc.kill()
+            return ("error", f"timed out after {timeout_s:g} s", "")
+        try:
+            return receiver.recv()
+        except EOFError:
+            proc.join(5)
+            return ("error", f"detector process died (exit code {proc.exitcode})", "")
+    finally:
+        receiver.close()
+        proc.join(5)
+        if proc.is_alive():
+            proc.kill()
+            proc.join()
+
+
+def _run_threaded(call: Callable[[], Any], timeout_s: float) -> tuple:
+    box: list[tuple] = []
+
+    def target() -> None:
+        try:
+            box.append(("value", call()))
+        except BaseException as exc:
+            box.append(("error", one_line(exc), traceback.format_exc()))
+
+    worker = threading.Thread(target=target, daemon=True, name="forensics-detector")
+    worker.start()
+    worker.join(timeout_s)
+    if worker.is_alive():
+        return ("error", f"timed out after {timeout_s:g} s (still running in the background)", "")
+    return box[0]
+
+
+def run_detector(host: PluginHost, name: str, evidence: Evidence, params: dict[str, Any], options: Options) -> DetectorFinding:
+    """Run one detector with containment; always returns a finding."""
+    registered = host.detectors.get(name)
+    if registered is None:
+        available = ", ".join(sorted(host.detectors)) or "none"
+        failed = [r.name for r in host.plugin_records() if r.status == "error"]
+        hint = f"; plugins that failed to load: {', '.join(failed)}" if failed else ""
+        return DetectorFinding(name, "unknown", "unknown", Status.ERROR, "The detector is not available.",
+                               None, None, None, {}, params, 0.0,
+                               error=f"no loaded plugin provides detector {name!r} (available: {available}){hint}")
+    spec, plugin = registered.spec, registered.plugin
+    analyze_impl = host.implementation("forensics_analyze", plugin)
+
+    def call() -> Any:
+        return analyze_impl(detector=name, evidence=evidence, params=dict(params))
+
+    started = time.perf_counter()
+    if analyze_impl is None:
+        outcome: tuple = ("error", f"plugin {plugin!r} registers {name!r} but implements no forensics_analyze", "")
+    elif options.isolation == "process" and "fork" in multiprocessing.get_all_start_methods():
+        outcome = _run_forked(call, options.timeout_s)
+    else:
+        outcome = _run_threaded(call, options.timeout_s)
+    elapsed = round(time.perf_counter() - started, 3)
+
+    def failed(reason: str, details: dict[str, Any] | None = None) -> DetectorFinding:
+        return DetectorFinding(spec.name, spec.version, plugin, Status.ERROR, "The detector failed; see error.",
+                               None, None, None, details or {}, params, elapsed, error=reason)
+
+    if outcome[0] == "error":
+        return failed(outcome[1], {"traceback": outcome[2]} if outcome[2] else None)
+    try:
+        result: DetectorResult = check_result(outcome[1])
+    except MalformedResult as exc:
+        return failed(f"malformed result: {exc}")
+    return DetectorFinding(spec.name, spec.version, plugin, result.status, result.summary, result.score,
+                           result.p_value, result.nfa, result.details, params, elapsed)
+
+
+def _extra_metadata(host: PluginHost, evidence: Evidence) -> dict[str, Any]:
+    extra: dict[str, Any] = {}
+    for outcome in host.call_each("forensics_extract_metadata", evidence=evidence):
+        if outcome.error is not None:
+            extra[outcome.plugin] = {"error": one_line(outcome.error)}
+        elif outcome.value is not None:
+            try:
+                extra[outcome.plugin] = to_jsonable(dict(outcome.value), f"{outcome.plugin} metadata")
+            except (MalformedResult, TypeError, ValueError) as exc:
+                extra[outcome.plugin] = {"error": f"malformed metadata: {exc}"}
+    return extra
+
+
+def fuse(host: PluginHost, policy: str, findings: Sequence[DetectorFinding], evidence: Evidence) -> Verdict:
+    """The verdict of the first plugin that implements ``policy``."""
+    for outcome in host.call_each("forensics_fuse", policy=policy, findings=findings, evidence=evidence):
+        if outcome.error is not None:
+            return Verdict(VerdictLabel.INCONCLUSIVE, None,
+                           f"Fusion policy {policy!r} of plugin {outcome.plugin!r} failed: {one_line(outcome.error)}", policy)
+        if isinstance(outcome.value, Verdict):
+            return outcome.value
+    return Verdict(VerdictLabel.INCONCLUSIVE, None, f"No installed plugin implements fusion policy {policy!r}.", policy)
+
+
+def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> Findings:
+    """Run the selected detectors on already loaded evidence."""
+    if options.isolation not in ISOLATIONS:
+        raise ValueError(f"isolation must be one of {', '.join(ISOLATIONS)}")
+    params = resolve_params(host, options)
+    selected = list(options.detectors) if options.detectors is not None else sorted(host.detectors)
+    evidence.info.extra_metadata = _extra_metadata(host, evidence)
+    findings = [run_detector(host, name, evidence, params.get(name, {}), options) for name in selected]
+    return Findings(
+        schema_version=SCHEMA_VERSION,
+        tool=Tool("forensics", __version__),
+        created=_now(),
+        evidence=evidence.info,
+        parameters={
+            "detectors": selected,
+            "timeout_s": options.timeout_s,
+            "max_pixels": options.max_pixels,
+            "fusion": options.fusion,
+            "isolation": options.isolation,
+            "detector_params": params,
+            "case_id": options.case_id,
+            "examiner": options.examiner,
+        },
+        environment=_environment(),
+        plugins=host.plugin_records(),
+        detectors=findings,
+        verdict=fuse(host, options.fusion, findings, evidence),
+    )
+
+
+def analyze(
+    path: str | os.PathLike[str],
+    detectors: Sequence[str] | None = None,
+    *,
+    host: PluginHost | None = None,
+    timeout: float = DEFAULT_TIMEOUT_S,
+    max_pixels: int = DEFAULT_MAX_PIXELS,
+    fusion: str = DEFAULT_FUSION,
+    isolation: str = "process",
+    case_id: str | None = None,
+    examiner: str | None = None,
+    **params: Mapping[str, Any],
+) -> Findings:
+    """Analyse one photo and return its findings.
+
+    Parameters
+    ----------
+    path : path-like
+        The evidence photo (read, never written).
+    detectors : sequence of str, optional
+        Detectors to run; default all installed.
+    host : PluginHost, optional
+        Loaded plugins; default: load the installed entry points.
+    timeout, max_pixels, fusion, isolation, case_id, examiner
+        See :class:`Options`.
+    **params : mapping
+        Per-detector parameter overrides, keyed by detector name, e.g.
+        ``analyze(p, lens_distortion={"estimator": "paper"})``.
+
+    Raises
+    ------
+    forensics_core.EvidenceError
+        When the file cannot be taken in.
+    ValueError
+        For unknown parameters.
+    """
+    host = host or PluginHost.from_entry_points()
+    evidence = load_evidence(path, max_pixels=max_pixels)
+    options = Options(
+        detectors=list(detectors) if detectors is not None else None,
+        timeout_s=timeout,
+        max_pixels=max_pixels,
+        fusion=fusion,
+        isolation=isolation,
+        detector_params={k: dict(v) for k, v in params.items()},
+        case_id=case_id,
+        examiner=examiner,
+    )
+    return analyze_evidence(evidence, host, options)
+
+
+__all__ = ["Options", "analyze", "analyze_evidence", "fuse", "resolve_params", "run_detector"]

@@ -1,0 +1,359 @@
+"""Typed findings: what a detector returns and what ``findings.json`` records.
+
+The dataclasses here are the one model of a run. They become JSON only at the
+edge (:func:`Findings.to_json`), and that JSON is described by
+``forensics_core/schema/findings.schema.json``, which the tests validate
+against. Bump :data:`SCHEMA_VERSION` whenever a field changes meaning.
+"""
+
+from __future__ import annotations
+
+import enum
+import json
+import math
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field, fields
+from typing import Any
+
+SCHEMA_VERSION = "1.0"
+
+
+class Status(str, enum.Enum):
+    """Outcome of one detector on one photo.
+
+    ``ok``: the detector ran and its numbers speak (for or against manipulation).
+    ``inconclusive``: it ran but the photo does not carry enough of its trace
+    (e.g. too few straight lines); never to be read as "authentic".
+    ``error``: it failed; ``error`` says why. ``skipped``: it did not apply.
+    """
+
+    OK = "ok"
+    INCONCLUSIVE = "inconclusive"
+    ERROR = "error"
+    SKIPPED = "skipped"
+
+
+class VerdictLabel(str, enum.Enum):
+    """The three outcomes an examiner may state."""
+
+    INCONSISTENT = "inconsistent"
+    CONSISTENT = "consistent"
+    INCONCLUSIVE = "inconclusive"
+
+
+class MalformedResult(ValueError):
+    """A plugin returned something that is not a valid :class:`DetectorResult`."""
+
+
+@dataclass(frozen=True)
+class DetectorSpec:
+    """What a plugin declares about one detector it provides.
+
+    Parameters
+    ----------
+    name : str
+        Unique detector name, ``[a-z][a-z0-9_]*`` (used on the command line).
+    version : str
+        Version of the method's implementation; recorded in every finding.
+    description : str
+        One sentence for ``forensics plugins`` and the report.
+    references : tuple of str
+        Literature the method follows, one citation per item.
+    default_params : mapping
+        JSON-serialisable parameters and their defaults; a user may override
+        any of them, and the merged set is recorded with the finding.
+    """
+
+    name: str
+    version: str
+    description: str
+    references: tuple[str, ...] = ()
+    default_params: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class DetectorResult:
+    """What a plugin's ``forensics_analyze`` returns for one photo.
+
+    Parameters
+    ----------
+    status : Status
+        See :class:`Status`.
+    summary : str
+        One sentence a reader of the report understands.
+    score : float or None
+        In [0, 1]; higher means more support for manipulation. ``None`` when the
+        detector has no opinion (inconclusive, skipped).
+    p_value : float or None
+        Probability, under the stated null hypothesis "the photo is an
+        original", of evidence at least this strong, where the method defines one.
+    nfa : float or None
+        Number of false alarms (a-contrario methods), where defined.
+    details : dict
+        Method-specific, JSON-serialisable numbers (numpy scalars and arrays are
+        converted; NaN and infinities are refused: use ``None``).
+    """
+
+    status: Status
+    summary: str
+    score: float | None = None
+    p_value: float | None = None
+    nfa: float | None = None
+    details: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class DetectorFinding:
+    """One detector's entry in ``findings.json``: its result plus provenance."""
+
+    name: str
+    version: str
+    plugin: str
+    status: Status
+    summary: str
+    score: float | None
+    p_value: float | None
+    nfa: float | None
+    details: dict[str, Any]
+    parameters: dict[str, Any]
+    elapsed_s: float
+    error: str | None = None
+
+
+@dataclass
+class Verdict:
+    """The fused outcome and how it was reached."""
+
+    label: VerdictLabel
+    score: float | None
+    explanation: str
+    policy: str
+    drivers: list[str] = field(default_factory=list)
+
+
+@dataclass
+class GpsPosition:
+    """GPS position in decimal degrees (WGS-84 as EXIF records it) and metres."""
+
+    latitude: float | None
+    longitude: float | None
+    altitude_m: float | None
+
+
+@dataclass
+class RawTag:
+    """One EXIF tag exactly as stored, its value rendered as safe text."""
+
+    ifd: str
+    tag: int
+    name: str
+    value: str
+
+
+@dataclass
+class ExifSummary:
+    """The EXIF fields examiners read first, plus every tag in ``raw``."""
+
+    make: str | None = None
+    model: str | None = None
+    lens_make: str | None = None
+    lens_model: str | None = None
+    focal_length_mm: float | None = None
+    focal_length_35mm: float | None = None
+    datetime: str | None = None
+    datetime_original: str | None = None
+    software: str | None = None
+    orientation: int | None = None
+    exif_image_width: int | None = None
+    exif_image_height: int | None = None
+    gps: GpsPosition | None = None
+    thumbnail_present: bool = False
+    raw: list[RawTag] = field(default_factory=list)
+
+
+@dataclass
+class EvidenceInfo:
+    """Identity and properties of the evidence file, taken before any analysis.
+
+    ``width`` and ``height`` are those of the stored pixel grid; ``orientation``
+    is reported, never applied.
+    """
+
+    path: str
+    name: str
+    size: int
+    sha256: str
+    sha512: str
+    md5: str
+    hashed_at: str
+    format: str
+    width: int
+    height: int
+    mode: str
+    orientation: int | None
+    icc_profile: bool
+    quantization_tables: dict[str, list[int]]
+    exif: ExifSummary
+    extra_metadata: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class PluginRecord:
+    """How one plugin loaded: listed in ``forensics plugins`` and in findings."""
+
+    name: str
+    distribution: str | None
+    version: str | None
+    status: str
+    hooks: list[str] = field(default_factory=list)
+    detectors: list[str] = field(default_factory=list)
+    error: str | None = None
+
+
+@dataclass
+class Tool:
+    name: str
+    version: str
+
+
+@dataclass
+class Findings:
+    """Everything one analysis established about one photo."""
+
+    schema_version: str
+    tool: Tool
+    created: str
+    evidence: EvidenceInfo
+    parameters: dict[str, Any]
+    environment: dict[str, Any]
+    plugins: list[PluginRecord]
+    detectors: list[DetectorFinding]
+    verdict: Verdict
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self, dict_factory=_enum_values)
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Findings:
+        """Rebuild findings read back from ``findings.json``."""
+        ev = dict(data["evidence"])
+        exif = dict(ev["exif"])
+        exif["gps"] = GpsPosition(**exif["gps"]) if exif.get("gps") else None
+        exif["raw"] = [RawTag(**t) for t in exif.get("raw", [])]
+        ev["exif"] = ExifSummary(**exif)
+        verdict = dict(data["verdict"])
+        verdict["label"] = VerdictLabel(verdict["label"])
+        return cls(
+            schema_version=data["schema_version"],
+            tool=Tool(**data["tool"]),
+            created=data["created"],
+            evidence=EvidenceInfo(**ev),
+            parameters=dict(data["parameters"]),
+            environment=dict(data["environment"]),
+            plugins=[PluginRecord(**p) for p in data["plugins"]],
+            detectors=[
+                DetectorFinding(**{**d, "status": Status(d["status"])}) for d in data["detectors"]
+            ],
+            verdict=Verdict(**verdict),
+        )
+
+
+def _enum_values(items: list[tuple[str, Any]]) -> dict[str, Any]:
+    return {k: (v.value if isinstance(v, enum.Enum) else v) for k, v in items}
+
+
+def to_jsonable(value: Any, where: str = "details") -> Any:
+    """Return ``value`` as plain JSON types, converting numpy scalars and arrays.
+
+    Raises
+    ------
+    MalformedResult
+        On NaN, infinities, or a type JSON cannot hold; the message names the
+        offending key path so a plugin author can find it.
+    """
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    if isinstance(value, enum.Enum):
+        return value.value
+    if isinstance(value, int):
+        return value
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise MalformedResult(f"{where} is {value}; use None for a missing number")
+        return value
+    if isinstance(value, Mapping):
+        out = {}
+        for k, v in value.items():
+            if not isinstance(k, str):
+                raise MalformedResult(f"{where} has a non-string key {k!r}")
+            out[k] = to_jsonable(v, f"{where}.{k}")
+        return out
+    if isinstance(value, (list, tuple)):
+        return [to_jsonable(v, f"{where}[{i}]") for i, v in enumerate(value)]
+    tolist = getattr(value, "tolist", None)
+    if callable(tolist) and type(value).__module__ == "numpy":
+        return to_jsonable(tolist(), where)
+    if hasattr(value, "__dataclass_fields__"):
+        return to_jsonable({f.name: getattr(value, f.name) for f in fields(value)}, where)
+    raise MalformedResult(f"{where} has a value of type {type(value).__name__}, which JSON cannot hold")
+
+
+def _unit_or_none(value: Any, name: str) -> float | None:
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) and type(value).__module__ != "numpy":
+        raise MalformedResult(f"{name} must be a number or None, not {type(value).__name__}")
+    try:
+        number = float(value)
+    except (TypeError, ValueError) as exc:
+        raise MalformedResult(f"{name} must be a number or None") from exc
+    if not math.isfinite(number):
+        raise MalformedResult(f"{name} is {number}; use None")
+    return number
+
+
+def check_result(result: Any) -> DetectorResult:
+    """Validate what a plugin returned and normalise it to plain JSON values.
+
+    Raises
+    ------
+    MalformedResult
+        With a message that says what is wrong.
+    """
+    if not isinstance(result, DetectorResult):
+        raise MalformedResult(f"expected a DetectorResult, got {type(result).__name__}")
+    try:
+        status = Status(result.status)
+    except ValueError as exc:
+        raise MalformedResult(f"unknown status {result.status!r}") from exc
+    if not isinstance(result.summary, str) or not result.summary.strip():
+        raise MalformedResult("summary must be a non-empty sentence")
+    score = _unit_or_none(result.score, "score")
+    p_value = _unit_or_none(result.p_value, "p_value")
+    nfa = _unit_or_none(result.nfa, "nfa")
+    if score is not None and not 0.0 <= score <= 1.0:
+        raise MalformedResult(f"score {score} is outside [0, 1]")
+    if p_value is not None and not 0.0 <= p_value <= 1.0:
+        raise MalformedResult(f"p_value {p_value} is outside [0, 1]")
+    if nfa is not None and nfa < 0.0:
+        raise MalformedResult(f"nfa {nfa} is negative")
+    if not isinstance(result.details, Mapping):
+        raise MalformedResult("details must be a mapping")
+    return DetectorResult(
+        status=status,
+        summary=result.summary.strip(),
+        score=score,
+        p_value=p_value,
+        nfa=nfa,
+        details=to_jsonable(result.details),
+    )
+
+
+def schema() -> dict[str, Any]:
+    """The JSON Schema that every ``findings.json`` satisfies."""
+    from importlib.resources import files
+
+    return json.loads(files("forensics_core").joinpath("schema/findings.schema.json").read_text(encoding="utf-8"))

@@ -1,0 +1,114 @@
+"""The plugin contract: every hook a detector plugin may implement.
+
+A plugin is a module (or object) listed under the entry-point group
+``forensics.plugins`` of its distribution::
+
+    [project.entry-points."forensics.plugins"]
+    my_detector = "my_package.plugin"
+
+and decorates its functions with :data:`forensics_core.hookimpl`. A plugin
+implements only the hooks it needs; argument names must match the
+specifications below, and a plugin may accept fewer arguments than offered.
+
+The core calls each plugin's implementation on its own, so a plugin that
+raises, hangs or returns something malformed is recorded as failed and never
+takes the others down.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+import pluggy
+
+if TYPE_CHECKING:
+    import click
+
+    from .evidence import Evidence
+    from .findings import DetectorFinding, DetectorResult, DetectorSpec, Verdict
+    from .report.sections import ReportSection
+
+PROJECT = "forensics"
+
+hookspec = pluggy.HookspecMarker(PROJECT)
+
+
+@hookspec
+def forensics_register_detectors() -> Sequence[DetectorSpec]:
+    """Declare the detectors this plugin provides.
+
+    Return a list of :class:`forensics_core.DetectorSpec`: for each, a unique
+    ``name`` (lower case, digits and underscores), the implementation's
+    ``version``, a one-sentence ``description``, the ``references`` it follows
+    and its ``default_params``. Detector names must be unique across all
+    installed plugins; a clash is reported as a load error of the later plugin.
+    """
+
+
+@hookspec
+def forensics_analyze(detector: str, evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult | None:
+    """Analyse one photo with one of this plugin's detectors.
+
+    Called once per photo for each selected detector, only on the plugin that
+    registered ``detector``. ``evidence`` gives the stored pixel grid
+    (``evidence.pixels``, read-only; ``evidence.luma`` as float in [0, 1]),
+    the original bytes (``evidence.data``) and the recorded properties and
+    EXIF (``evidence.info``). ``params`` holds the detector's default
+    parameters merged with the user's overrides.
+
+    Return a :class:`forensics_core.DetectorResult`: ``status`` (``ok``,
+    ``inconclusive`` with the reason in the summary, or ``skipped``), a
+    one-sentence ``summary``, a ``score`` in [0, 1] (higher = more support for
+    manipulation) or None, a ``p_value`` and/or ``nfa`` where the method
+    defines one, and JSON-serialisable ``details``. Raise on failure: the core
+    records the exception as this detector's error.
+
+    The call runs in a child process with a time limit (``--timeout``), so it
+    must not rely on state it changes in the parent; it must be deterministic
+    for the same input and parameters (fix any random seed).
+    """
+
+
+@hookspec
+def forensics_report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSection | None:
+    """Contribute this plugin's section of the evidence report.
+
+    Called for each finding whose detector this plugin registered (the plugin
+    may ignore findings of other detectors by returning None). Return a
+    :class:`forensics_core.report.ReportSection`: a title, a Jinja2 template
+    (autoescaped; never mark evidence-derived text safe), the context it
+    renders with, and figures (PNG or SVG bytes) it refers to by name.
+    """
+
+
+@hookspec
+def forensics_extract_metadata(evidence: Evidence) -> Mapping[str, Any] | None:
+    """Optionally read extra metadata from the evidence (e.g. XMP, maker notes).
+
+    Return a JSON-serialisable mapping; it is recorded in the findings under
+    ``evidence.extra_metadata[<plugin name>]``. Do not re-open the file:
+    ``evidence.data`` holds its bytes.
+    """
+
+
+@hookspec(firstresult=True)
+def forensics_fuse(policy: str, findings: Sequence[DetectorFinding], evidence: Evidence) -> Verdict | None:
+    """Combine the detectors' findings into the verdict, under ``policy``.
+
+    ``policy`` is the name the user chose (``--fusion``; default
+    ``bonferroni``, built in). Return None unless ``policy`` names the rule
+    this plugin implements; otherwise return a :class:`forensics_core.Verdict`
+    whose ``explanation`` states the rule, its threshold and which detectors
+    drove the outcome. Inconclusive, skipped and failed detectors must count
+    for neither side.
+    """
+
+
+@hookspec
+def forensics_register_commands(cli: click.Group) -> None:
+    """Add click commands to the ``forensics`` command line.
+
+    Use ``@cli.command()`` on your functions; choose names that will not
+    clash with the core's (``analyze``, ``plugins``) or other plugins'.
+    """

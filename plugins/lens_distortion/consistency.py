@@ -1,0 +1,666 @@
+"""Is one lens consistent with every line? The splice decision.
+
+Two layers are reported:
+
+* the paper's two rules (sec. 4.2): (a) distortion symmetric and not
+  decreasing with the distance from the centre, (b) the same sign of ``k1``
+  on every line - each with the lines that break it, judged with standard
+  errors (:func:`paper_rules`);
+* the default test: one camera model ``(k1, k2, cx, cy)`` fitted robustly to
+  all lines together, each line with its own nuisance ``(theta, rho)``; then
+  every line's and every compact group of lines' departure from it, and an
+  image-level p-value (:func:`assess`).
+
+Noise model, and why (the stderrs decide false alarms):
+
+1. Each line's white-noise level is its own residual RMS after its own joint
+   fit (so a pasted line's misfit to the global model does not inflate it).
+2. Edge points along a line are correlated (JPEG blocks, demosaicing, blur),
+   so ``N`` points carry fewer than ``N`` independent observations. Every
+   variance is multiplied by the residuals' integrated autocorrelation time
+   ``tau`` (:func:`.k1.integrated_autocorrelation`), i.e. the effective number
+   of points is ``N / tau``.
+3. A model-error floor: the radial polynomial omits tangential and
+   higher-order terms, and edge localisers are biased on curved edges, so a
+   line can carry a systematic line-shaped error that no amount of points
+   averages away. A systematic error of ``model_floor_px`` pixels RMS is
+   indistinguishable from a ``k1`` change of ``model_floor_px /
+   leverage_px`` (:class:`.k1.LineK1`), which is added in quadrature to each
+   line's ``k1`` error.
+4. The uncertainty of the global ``(k1, k2, cx, cy)`` is propagated into every
+   departure through the line's sensitivity to them. The positive covariance
+   between an inlier line and the global fit it contributed to is ignored,
+   which overstates the departure's variance slightly (conservative).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.stats import chi2, norm
+
+from .geometry import norm_scale, to_normalised
+from .k1 import LineK1, fit_lines
+
+__all__ = [
+    "ConsistencyResult",
+    "GlobalModel",
+    "GroupDeparture",
+    "LineDeparture",
+    "PaperRules",
+    "assess",
+    "paper_rules",
+]
+
+_TUKEY_C = 4.685  # biweight tuning constant: 95% efficiency under Gaussian noise
+_CAUCHY_C = 2.385  # Cauchy tuning constant: 95% efficiency under Gaussian noise
+_CAUCHY_ROUNDS = 3  # soft (never zero) weights first, so one bad start cannot drop good lines
+_MAX_ROUNDS = 10
+
+
+@dataclass(frozen=True)
+class PaperRules:
+    """The paper's two consistency rules (sec. 4.2), judged with standard errors.
+
+    Attributes
+    ----------
+    sign : int
+        Majority sign of ``k1`` (+1 barrel, -1 pincushion, 0 if undecided):
+        the sign of the inverse-variance weighted median.
+    sign_violators : tuple of int
+        Rule (b): lines whose ``k1`` is significantly of the other sign,
+        ``-sign k1 / se > z_crit_sign``.
+    order_violations : tuple of (int, int)
+        Rule (a): pairs ``(i, j)`` with ``|d_i| < |d_j|`` but
+        ``sign (k1_i - k1_j) > z_crit_order sqrt(se_i^2 + se_j^2)``: a line
+        nearer the centre distorts significantly more. Equal distortion is
+        allowed, so lines at equal distance on both sides must agree
+        (symmetry) and none may exceed a farther one.
+    order_violators : tuple of int
+        Lines appearing in ``order_violations``.
+    z_crit_sign, z_crit_order : float
+        One-sided critical values, Bonferroni-corrected over lines and over
+        pairs respectively.
+    consistent : bool
+        No violation of either rule.
+    """
+
+    sign: int
+    sign_violators: tuple[int, ...]
+    order_violations: tuple[tuple[int, int], ...]
+    order_violators: tuple[int, ...]
+    z_crit_sign: float
+    z_crit_order: float
+    consistent: bool
+
+
+@dataclass(frozen=True)
+class GlobalModel:
+    """One camera model fitted robustly to all informative lines.
+
+    Distortion parameters as in :mod:`.geometry`; the centre ``(cx, cy)`` is
+    normalised (multiply by ``scale_px`` for pixels). Standard errors include
+    the correlated-noise inflation but not the per-line model-error floor.
+
+    Attributes
+    ----------
+    inlier : ndarray of bool, shape (n_lines,)
+        Informative lines whose departure from the model is not significant
+        at the image level (uninformative lines are ``False``).
+    weight : ndarray, shape (n_lines,)
+        Final robust weight of each line in the fit (0 for uninformative).
+    sigma_px : float
+        Median white-noise residual RMS of the informative lines, pixels.
+    covariance : ndarray, shape (4, 4)
+        Covariance of ``(k1, k2, cx, cy)``.
+    """
+
+    k1: float
+    k1_stderr: float
+    k2: float
+    k2_stderr: float
+    cx: float
+    cx_stderr: float
+    cy: float
+    cy_stderr: float
+    covariance: np.ndarray
+    inlier: np.ndarray
+    weight: np.ndarray
+    sigma_px: float
+    scale_px: float
+    n_lines_explained: int
+    n_lines_informative: int
+
+
+@dataclass(frozen=True)
+class LineDeparture:
+    """One line against the global model.
+
+    Attributes
+    ----------
+    line_id : int
+        Index into the input list.
+    k1 : float
+        The line's own ``k1`` with the global ``k2`` and centre held fixed.
+    delta_k1, delta_k1_stderr : float
+        ``k1 - model.k1`` and its standard error (correlated-noise inflation,
+        model-error floor and global-model uncertainty included).
+    z : float
+        ``delta_k1 / delta_k1_stderr`` (NaN for an uninformative line).
+    p_value : float
+        Two-sided normal p-value of ``z``, not corrected for multiplicity.
+    flagged : bool
+        Significant after the image-level Bonferroni correction.
+    informative : bool
+        Whether the line entered the model and the tests.
+    distance : float
+        Signed normalised distance from the image centre.
+    residual_rms_px : float
+        White-noise residual RMS of the line's own fit, pixels.
+    n_effective : float
+        Effective number of independent points.
+    """
+
+    line_id: int
+    k1: float
+    delta_k1: float
+    delta_k1_stderr: float
+    z: float
+    p_value: float
+    flagged: bool
+    informative: bool
+    distance: float
+    residual_rms_px: float
+    n_effective: float
+
+
+@dataclass(frozen=True)
+class GroupDeparture:
+    """A compact group of lines sharing one ``k1`` different from the model.
+
+    The group's common departure is the generalised-least-squares mean of
+    its members' ``delta_k1`` (their covariance includes the shared
+    global-model uncertainty); ``z**2`` is the Wald form of the
+    likelihood-ratio test of one extra parameter, a ``k1`` of the group's
+    own, against the global model.
+
+    Attributes
+    ----------
+    line_ids : tuple of int
+    delta_k1, delta_k1_stderr, z, p_value : float
+        Common departure, its standard error, ``z`` and two-sided p-value
+        (uncorrected).
+    heterogeneity_p : float
+        Chi-square p-value of the members' scatter about the common
+        departure: small means the members do not agree with each other.
+    flagged : bool
+        Significant after the image-level Bonferroni correction and the
+        members agree with each other (``heterogeneity_p >= alpha``).
+    """
+
+    line_ids: tuple[int, ...]
+    delta_k1: float
+    delta_k1_stderr: float
+    z: float
+    p_value: float
+    heterogeneity_p: float
+    flagged: bool
+
+
+@dataclass(frozen=True)
+class ConsistencyResult:
+    """Outcome of :func:`assess`.
+
+    Attributes
+    ----------
+    verdict : str
+        ``"inconsistent"`` (the image-level p-value is below ``alpha``),
+        ``"consistent"`` (it is not; this is absence of evidence, not proof
+        of authenticity) or ``"inconclusive"`` (too few informative lines).
+    model : GlobalModel or None
+        ``None`` when inconclusive.
+    departures : tuple of LineDeparture
+        One per input line, in input order.
+    groups : tuple of GroupDeparture
+        Every candidate group tested.
+    p_value : float
+        Image-level p-value (Bonferroni over all line and group tests).
+    test : str
+        The test, in plain words.
+    evidence : str
+        ``"group"``, ``"single line"`` or ``"none"``: what drove the verdict.
+    flagged_ids : tuple of int
+        Lines the model cannot explain (flagged lines and members of
+        flagged groups), for localisation.
+    paper_rules : PaperRules
+    informative : bool
+    reason : str or None
+        Why the result is inconclusive.
+    alpha : float
+    """
+
+    verdict: str
+    model: GlobalModel | None
+    departures: tuple[LineDeparture, ...]
+    groups: tuple[GroupDeparture, ...]
+    p_value: float
+    test: str
+    evidence: str
+    flagged_ids: tuple[int, ...]
+    paper_rules: PaperRules
+    informative: bool
+    reason: str | None
+    alpha: float
+
+
+def _weighted_median(values: np.ndarray, weights: np.ndarray) -> float:
+    order = np.argsort(values, kind="stable")
+    cumulative = np.cumsum(weights[order])
+    return float(values[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
+
+
+def paper_rules(
+    distances: np.ndarray, k1: np.ndarray, k1_stderr: np.ndarray, *, alpha: float = 0.01
+) -> PaperRules:
+    """The paper's rules (a) and (b) (sec. 4.2) with standard errors.
+
+    A line is only called a violator when its disagreement is significant:
+    one-sided at ``alpha``, Bonferroni-corrected over the ``m`` lines with
+    finite stderr for rule (b) and over their ``m (m - 1) / 2`` pairs for
+    rule (a). Lines with non-finite stderr (through the centre) are ignored.
+
+    Parameters
+    ----------
+    distances : ndarray, shape (m,)
+        Signed normalised distances from the centre.
+    k1, k1_stderr : ndarray, shape (m,)
+        Per-line ``k1`` and its standard error.
+    alpha : float
+        Significance level.
+
+    Returns
+    -------
+    PaperRules
+    """
+    d, k, se = (np.asarray(a, dtype=np.float64) for a in (distances, k1, k1_stderr))
+    usable = np.flatnonzero(np.isfinite(se) & (se > 0))
+    m = usable.size
+    z_sign = float(norm.isf(alpha / max(m, 1)))
+    z_order = float(norm.isf(alpha / max(m * (m - 1) // 2, 1)))
+    if m == 0:
+        return PaperRules(0, (), (), (), z_sign, z_order, True)
+    sign = int(np.sign(_weighted_median(k[usable], se[usable] ** -2.0)))
+    sign_violators = usable[-sign * k[usable] / se[usable] > z_sign] if sign else usable[:0]
+    i, j = np.triu_indices(m, 1)
+    i, j = usable[i], usable[j]
+    nearer_first = np.abs(d[i]) <= np.abs(d[j])
+    near, far = np.where(nearer_first, i, j), np.where(nearer_first, j, i)
+    excess = sign * (k[near] - k[far]) / np.hypot(se[near], se[far])
+    bad = (excess > z_order) & (np.abs(d[near]) < np.abs(d[far]))
+    pairs = tuple((int(a), int(b)) for a, b in zip(near[bad], far[bad]))
+    order_violators = tuple(int(v) for v in np.unique(np.concatenate((near[bad], far[bad]))))
+    return PaperRules(
+        sign=sign,
+        sign_violators=tuple(int(v) for v in sign_violators),
+        order_violations=pairs,
+        order_violators=order_violators,
+        z_crit_sign=z_sign,
+        z_crit_order=z_order,
+        consistent=not (sign_violators.size or pairs),
+    )
+
+
+@dataclass(frozen=True)
+class _Lines:
+    """Informative lines stacked for the global fit."""
+
+    points: np.ndarray  # (N, 2) normalised
+    starts: np.ndarray  # (m,)
+    counts: np.ndarray  # (m,)
+    ids: np.ndarray  # (N,)
+    reference_normal: np.ndarray  # (m, 2) keeps each fitted normal's orientation fixed
+
+    @classmethod
+    def of(cls, lines: Sequence[np.ndarray]) -> _Lines:
+        counts = np.array([len(p) for p in lines], dtype=np.intp)
+        starts = np.concatenate(([0], np.cumsum(counts)[:-1])).astype(np.intp)
+        ids = np.repeat(np.arange(counts.size), counts)
+        points = np.concatenate(lines)
+        normal, _ = _line_tls(points, starts, counts, ids)
+        return cls(points, starts, counts, ids, normal)
+
+    def sum(self, values: np.ndarray) -> np.ndarray:
+        return np.add.reduceat(values, self.starts, axis=0)
+
+
+def _line_tls(
+    u: np.ndarray, starts: np.ndarray, counts: np.ndarray, ids: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per-line total-least-squares normal, shape (m, 2), and centred points, shape (N, 2)."""
+    mean = np.add.reduceat(u, starts, axis=0) / counts[:, None]
+    v = u - mean[ids]
+    sxx, syy, sxy = np.add.reduceat(np.column_stack((v[:, 0] ** 2, v[:, 1] ** 2, v[:, 0] * v[:, 1])), starts, axis=0).T
+    direction = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
+    return np.column_stack((-np.sin(direction), np.cos(direction))), v
+
+
+def _projected_model(lines: _Lines, beta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Variable-projection residuals, shape (N,), and Jacobian, shape (N, 4).
+
+    For camera parameters ``beta = (k1, k2, cx, cy)`` every line's
+    ``(theta, rho)`` is eliminated in closed form (TLS line of its undistorted
+    points), with the normal oriented like the line's reference normal so
+    residual signs never flip. The Jacobian is Kaufman's: the derivative of
+    the undistorted points along the normal, with the part each line's own
+    offset and rotation can absorb projected out. Normalised units.
+    """
+    k1, k2, cx, cy = beta
+    q = lines.points - (cx, cy)
+    r2 = np.einsum("ij,ij->i", q, q)
+    f = 1.0 + k1 * r2 + k2 * r2 * r2
+    u = (cx, cy) + q * f[:, None]
+    normal, v = _line_tls(u, lines.starts, lines.counts, lines.ids)
+    normal *= np.sign(np.einsum("ij,ij->i", normal, lines.reference_normal))[:, None]
+    n = normal[lines.ids]
+    residual = np.einsum("ij,ij->i", n, v)
+    along_q = np.einsum("ij,ij->i", n, q)
+    slope = 2.0 * (k1 + 2.0 * k2 * r2)
+    columns = np.column_stack(
+        (
+            r2 * along_q,
+            r2 * r2 * along_q,
+            (1.0 - f) * n[:, 0] - slope * q[:, 0] * along_q,
+            (1.0 - f) * n[:, 1] - slope * q[:, 1] * along_q,
+        )
+    )
+    position = v[:, 0] * n[:, 1] - v[:, 1] * n[:, 0]
+    mean = lines.sum(columns) / lines.counts[:, None]
+    tilt = lines.sum(columns * position[:, None]) / lines.sum(position**2)[:, None]
+    return residual, columns - mean[lines.ids] - tilt[lines.ids] * position[:, None]
+
+
+def _fit_global(
+    lines: _Lines,
+    beta0: np.ndarray,
+    row_weight: np.ndarray,
+    prior_sd: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted variable-projection LM fit of ``(k1, k2, cx, cy)``.
+
+    ``row_weight`` (N,) whitens each line's residuals and applies its robust
+    weight; ``prior_sd`` (4,) are the standard deviations of zero-mean
+    Gaussian priors (``inf`` for none), added as pseudo-observations.
+    Returns the parameters and their covariance, shape (4, 4).
+    """
+    prior_w = 1.0 / prior_sd
+
+    def fun(beta: np.ndarray) -> np.ndarray:
+        residual, _ = _projected_model(lines, beta)
+        return np.concatenate((residual * row_weight, beta * prior_w))
+
+    def jac(beta: np.ndarray) -> np.ndarray:
+        _, columns = _projected_model(lines, beta)
+        return np.vstack((columns * row_weight[:, None], np.diag(prior_w)))
+
+    beta = least_squares(fun, beta0, jac=jac, method="lm", x_scale="jac").x
+    j = jac(beta)
+    return beta, np.linalg.pinv(j.T @ j)
+
+
+def _sensitivity(lines: _Lines, beta: np.ndarray) -> np.ndarray:
+    """``d k1_line / d (k2, cx, cy)`` per line, shape (m, 3), by linearisation."""
+    _, columns = _projected_model(lines, beta)
+    g = columns[:, :1]
+    return -lines.sum(g * columns[:, 1:]) / lines.sum(g * g)
+
+
+@dataclass(frozen=True)
+class _Departures:
+    fits: list[LineK1]
+    delta: np.ndarray  # (m,)
+    line_var: np.ndarray  # (m,) own noise + floor
+    gradient: np.ndarray  # (m, 4) d delta / d beta
+    z: np.ndarray  # (m,)
+
+
+def _departures(
+    lines: _Lines, norm_lines: list[np.ndarray], beta: np.ndarray, cov: np.ndarray, scale: float, floor_px: float
+) -> _Departures:
+    fits = fit_lines(norm_lines, scale, k2=beta[1], centre=beta[2:], k1_start=beta[0])
+    k1 = np.array([f.k1 for f in fits])
+    se = np.array([f.k1_stderr for f in fits])
+    leverage = np.array([f.leverage_px for f in fits])
+    line_var = se**2 + (floor_px / leverage) ** 2
+    gradient = np.column_stack((-np.ones(k1.size), _sensitivity(lines, beta)))
+    total = line_var + np.einsum("mi,ij,mj->m", gradient, cov, gradient)
+    delta = k1 - beta[0]
+    return _Departures(fits, delta, line_var, gradient, delta / np.sqrt(total))
+
+
+def _robust_weight(z: np.ndarray, round_: int) -> np.ndarray:
+    if round_ < _CAUCHY_ROUNDS:
+        return 1.0 / (1.0 + (z / _CAUCHY_C) ** 2)
+    return np.clip(1.0 - (z / _TUKEY_C) ** 2, 0.0, None) ** 2
+
+
+def _candidate_groups(midpoints: np.ndarray, max_size: int) -> list[tuple[int, ...]]:
+    """Each line with its 1..max_size-1 nearest neighbours (by midpoint), deduplicated."""
+    m = len(midpoints)
+    distance = np.linalg.norm(midpoints[:, None] - midpoints[None], axis=2)
+    order = np.argsort(distance, axis=1, kind="stable")
+    groups = {tuple(sorted(order[j, :size])) for j in range(m) for size in range(2, min(max_size, m) + 1)}
+    return sorted(groups, key=lambda g: (len(g), g))
+
+
+def _group_tests(
+    groups: list[tuple[int, ...]], dep: _Departures, cov: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """GLS common departure of each group: (delta, stderr, heterogeneity chi2), each (G,)."""
+    delta = np.empty(len(groups))
+    stderr = np.empty(len(groups))
+    q = np.empty(len(groups))
+    sizes = np.array([len(g) for g in groups])
+    for size in np.unique(sizes):
+        pick = np.flatnonzero(sizes == size)
+        members = np.array([groups[i] for i in pick])  # (G_s, s)
+        grad = dep.gradient[members]  # (G_s, s, 4)
+        c = np.einsum("gsi,ij,gtj->gst", grad, cov, grad) + np.eye(size) * dep.line_var[members][:, :, None]
+        d = dep.delta[members]
+        solved = np.linalg.solve(c, np.stack((np.ones_like(d), d), axis=2))  # C^-1 [1, d]
+        info = solved[:, :, 0].sum(axis=1)
+        mean = np.einsum("gs,gs->g", solved[:, :, 0], d) / info
+        delta[pick], stderr[pick] = mean, info**-0.5
+        q[pick] = np.einsum("gs,gs->g", d, solved[:, :, 1]) - mean**2 * info
+    return delta, stderr, q
+
+
+def _inconclusive(
+    reason: str, fits: list[LineK1], rules: PaperRules, alpha: float
+) -> ConsistencyResult:
+    departures = tuple(
+        LineDeparture(j, f.k1, np.nan, np.nan, np.nan, np.nan, False, False, f.distance, f.residual_rms_px, f.n_effective)
+        for j, f in enumerate(fits)
+    )
+    test = "no test: " + reason
+    return ConsistencyResult("inconclusive", None, departures, (), np.nan, test, "none", (), rules, False, reason, alpha)
+
+
+def assess(
+    lines_px: Sequence[np.ndarray],
+    shape: tuple[int, ...],
+    *,
+    alpha: float = 0.01,
+    min_lines: int = 6,
+    min_points: int = 30,
+    max_k1_stderr: float = 0.02,
+    model_floor_px: float = 0.05,
+    max_group_size: int = 4,
+    centre_prior_sd: float = 0.1,
+    k2_prior_sd: float = 0.3,
+) -> ConsistencyResult:
+    """Test whether one radial-distortion camera explains every line.
+
+    Parameters
+    ----------
+    lines_px : sequence of ndarray, each shape (N_j, 2)
+        Sub-pixel points ``(x, y)`` of each line, pixels, ordered along it.
+    shape : tuple
+        Image shape ``(H, W, ...)``.
+    alpha : float
+        Image-level significance level.
+    min_lines : int
+        Fewest informative lines for a conclusive answer. The model has four
+        camera parameters and must be fitted robustly, so a majority of
+        consistent lines has to over-determine it.
+    min_points : int
+        Lines with fewer points are uninformative.
+    max_k1_stderr : float
+        Lines whose ``k1`` error (paper model, noise inflation and floor
+        included) exceeds this are uninformative: short, noisy or near-radial
+        lines that could not reveal a departure of the size splices cause
+        (``|delta k1| >= 0.05``).
+    model_floor_px : float
+        Systematic line-shaped error, pixels RMS, allowed on every line (see
+        the module docstring).
+    max_group_size : int
+        Largest group of neighbouring lines tested for a common departure.
+    centre_prior_sd, k2_prior_sd : float
+        Standard deviations of zero-mean Gaussian priors on the centre of
+        distortion (normalised) and on ``k2``: weak, they only keep the fit
+        away from physically absurd solutions when few lines constrain it.
+
+    Returns
+    -------
+    ConsistencyResult
+
+    Notes
+    -----
+    The image-level test: every informative line's departure ``z`` and every
+    candidate group's common departure ``z`` (groups: each line with its
+    1 to ``max_group_size - 1`` nearest neighbours, chosen by position only,
+    before looking at the data's ``k1``) is a two-sided normal test; the
+    image p-value is the smallest p-value times the number of tests
+    (Bonferroni), capped at 1.
+    """
+    scale = norm_scale(shape)
+    norm_lines = [to_normalised(p, shape) for p in lines_px]
+    usable = [j for j, p in enumerate(norm_lines) if len(p) >= min_points]
+    paper_fits = _paper_model_fits(norm_lines, usable, scale)
+    k1_paper = np.array([f.k1 for f in paper_fits])
+    se_paper = np.sqrt(np.array([f.k1_stderr**2 for f in paper_fits]) + np.array(
+        [(model_floor_px / f.leverage_px) ** 2 if f.leverage_px > 0 else np.inf for f in paper_fits]
+    ))
+    rules = paper_rules([f.distance for f in paper_fits], k1_paper, se_paper, alpha=alpha)
+    informative = np.flatnonzero(se_paper <= max_k1_stderr)
+    if informative.size < min_lines:
+        reason = (
+            f"{informative.size} informative line(s), at least {min_lines} needed "
+            f"(lines need >= {min_points} points and a k1 standard error <= {max_k1_stderr}; "
+            "short, noisy or near-radial lines do not constrain k1)"
+        )
+        return _inconclusive(reason, paper_fits, rules, alpha)
+    return _decide(norm_lines, informative, paper_fits, rules, scale, alpha, model_floor_px, max_group_size,
+                   np.array([np.inf, k2_prior_sd, centre_prior_sd, centre_prior_sd]))
+
+
+def _paper_model_fits(norm_lines: list[np.ndarray], usable: list[int], scale: float) -> list[LineK1]:
+    """Joint per-line fits under the paper's model (centre fixed, no k2); short lines get inf stderr."""
+    fitted = dict(zip(usable, fit_lines([norm_lines[j] for j in usable], scale))) if usable else {}
+    return [
+        fitted.get(j) or LineK1(np.nan, np.inf, np.inf, np.nan, len(p), 0.0, np.nan, np.nan, np.nan, 0.0)
+        for j, p in enumerate(norm_lines)
+    ]
+
+
+def _decide(
+    norm_lines: list[np.ndarray],
+    informative: np.ndarray,
+    paper_fits: list[LineK1],
+    rules: PaperRules,
+    scale: float,
+    alpha: float,
+    floor_px: float,
+    max_group_size: int,
+    prior_sd: np.ndarray,
+) -> ConsistencyResult:
+    chosen = [norm_lines[j] for j in informative]
+    lines = _Lines.of(chosen)
+    fits = [paper_fits[j] for j in informative]
+    k1_start = _weighted_median(np.array([f.k1 for f in fits]), np.array([f.k1_stderr for f in fits]) ** -2.0)
+    beta = np.array([k1_start, 0.0, 0.0, 0.0])
+    weight = np.ones(informative.size)
+    for round_ in range(_MAX_ROUNDS):
+        noise = np.array([f.residual_rms_px / scale * np.sqrt(f.n_points / f.n_effective) for f in fits])
+        row_weight = (np.sqrt(weight) / noise)[lines.ids]
+        beta, cov = _fit_global(lines, beta, row_weight, prior_sd)
+        dep = _departures(lines, chosen, beta, cov, scale, floor_px)
+        fits = dep.fits
+        new_weight = _robust_weight(dep.z, round_)
+        if round_ >= _CAUCHY_ROUNDS and np.allclose(new_weight, weight, atol=1e-3):
+            break
+        weight = new_weight
+
+    groups = _candidate_groups(np.array([p.mean(axis=0) for p in chosen]), max_group_size)
+    g_delta, g_se, g_q = _group_tests(groups, dep, cov)
+    g_z = g_delta / g_se
+    line_p = 2.0 * norm.sf(np.abs(dep.z))
+    group_p = 2.0 * norm.sf(np.abs(g_z))
+    n_tests = line_p.size + group_p.size
+    image_p = float(min(1.0, n_tests * min(line_p.min(), group_p.min(initial=1.0))))
+    line_flag = line_p * n_tests < alpha
+    het_p = chi2.sf(g_q, np.array([len(g) for g in groups]) - 1)
+    group_flag = (group_p * n_tests < alpha) & (het_p >= alpha)
+
+    ids = informative
+    flagged = set(ids[line_flag].tolist())
+    for g, f in zip(groups, group_flag):
+        if f:
+            flagged.update(ids[list(g)].tolist())
+    evidence = "group" if group_flag.any() else ("single line" if line_flag.any() else "none")
+    inlier = np.zeros(len(norm_lines), dtype=bool)
+    inlier[ids[~line_flag]] = True
+    full_weight = np.zeros(len(norm_lines))
+    full_weight[ids] = weight
+    se = np.sqrt(np.diag(cov))
+    model = GlobalModel(
+        k1=float(beta[0]), k1_stderr=float(se[0]), k2=float(beta[1]), k2_stderr=float(se[1]),
+        cx=float(beta[2]), cx_stderr=float(se[2]), cy=float(beta[3]), cy_stderr=float(se[3]),
+        covariance=cov, inlier=inlier, weight=full_weight,
+        sigma_px=float(np.median([f.residual_rms_px for f in fits])), scale_px=scale,
+        n_lines_explained=int(inlier.sum()), n_lines_informative=int(ids.size),
+    )
+    departures = _line_departures(paper_fits, ids, dep, line_p, line_flag)
+    group_results = tuple(
+        GroupDeparture(tuple(int(ids[i]) for i in g), float(d), float(s), float(z), float(p), float(h), bool(f))
+        for g, d, s, z, p, h, f in zip(groups, g_delta, g_se, g_z, group_p, het_p, group_flag)
+    )
+    test = (
+        f"One camera model (k1, k2 and centre of distortion free, each line its own straight line) fitted "
+        f"robustly to {ids.size} informative lines; each line's own k1 (global k2 and centre fixed) and the "
+        f"common k1 of each of {len(groups)} groups of 2-{max_group_size} neighbouring lines compared with the "
+        f"model's by a two-sided z-test; image p-value = smallest p times the {n_tests} tests (Bonferroni)."
+    )
+    verdict = "inconsistent" if image_p < alpha else "consistent"
+    return ConsistencyResult(verdict, model, departures, group_results, image_p, test, evidence,
+                             tuple(sorted(flagged)), rules, True, None, alpha)
+
+
+def _line_departures(
+    paper_fits: list[LineK1], ids: np.ndarray, dep: _Departures, line_p: np.ndarray, line_flag: np.ndarray
+) -> tuple[LineDeparture, ...]:
+    position = {int(j): i for i, j in enumerate(ids)}
+    out = []
+    for j, f in enumerate(paper_fits):
+        i = position.get(j)
+        if i is None:
+            out.append(LineDeparture(j, np.nan, np.nan, np.nan, np.nan, np.nan, False, False, f.distance,
+                                     f.residual_rms_px, f.n_effective))
+            continue
+        g = dep.fits[i]
+        out.append(LineDeparture(j, g.k1, float(dep.delta[i]), float(dep.delta[i] / dep.z[i]), float(dep.z[i]),
+                                 float(line_p[i]), bool(line_flag[i]), True, g.distance, g.residual_rms_px,
+                                 g.n_effective))
+    return tuple(out)

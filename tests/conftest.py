@@ -1,0 +1,47 @@
+import json
+import shutil
+from importlib.metadata import EntryPoint
+from pathlib import Path
+
+import jsonschema
+import pytest
+
+from forensics_core import ENTRY_POINT_GROUP
+from forensics_core.findings import schema
+from forensics_core.plugins import PluginHost
+
+DATA = Path(__file__).parent / "data"
+
+
+@pytest.fixture(scope="session")
+def data_dir() -> Path:
+    return DATA
+
+
+@pytest.fixture
+def photo(tmp_path) -> Path:
+    """A real chessboard photo, copied so a test can watch its bytes."""
+    target = tmp_path / "left01.jpg"
+    shutil.copyfile(DATA / "calibration" / "left01.jpg", target)
+    return target
+
+
+def fixture_host(*names: str, module: str = "fixture_plugins") -> PluginHost:
+    """A host with the named fixture plugins, loaded through real entry points."""
+    host = PluginHost(allow=None, deny=())
+    for name in names:
+        host.load_entry_point(EntryPoint(name, f"{module}:{name}", ENTRY_POINT_GROUP))
+    return host
+
+
+@pytest.fixture(scope="session")
+def validate():
+    validator = jsonschema.Draft202012Validator(schema())
+
+    def check(doc):
+        if not isinstance(doc, dict):
+            doc = json.loads(doc.to_json())
+        validator.validate(doc)
+        return doc
+
+    return check

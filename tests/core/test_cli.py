@@ -1,0 +1,86 @@
+"""The command line as a user meets it: real processes, real files."""
+
+import hashlib
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+from test_evidence import bad_inputs
+
+FORENSICS = [sys.executable, "-m", "forensics_core"]
+
+
+def run(*args, env=None, cwd=None):
+    full_env = {**os.environ, **(env or {})}
+    return subprocess.run([*FORENSICS, *map(str, args)], capture_output=True, text=True, env=full_env, cwd=cwd, timeout=300)
+
+
+def test_version_and_help():
+    out = run("--version")
+    assert out.returncode == 0 and "forensics, version" in out.stdout
+    for cmd in ([], ["analyze"], ["plugins"]):
+        res = run(*cmd, "--help")
+        assert res.returncode == 0 and "Usage:" in res.stdout
+
+
+def test_analyze_writes_findings_and_leaves_the_evidence_untouched(photo, tmp_path, validate):
+    before = hashlib.sha256(photo.read_bytes()).hexdigest()
+    mtime = photo.stat().st_mtime_ns
+    out = run("analyze", photo, "--out", tmp_path / "out", "--case-id", "C-1", "--examiner", "A. Examiner")
+    assert out.returncode == 0, out.stderr
+    findings = json.loads((tmp_path / "out" / "left01" / "findings.json").read_text())
+    validate(findings)
+    assert findings["evidence"]["sha256"] == before
+    assert findings["parameters"]["case_id"] == "C-1"
+    assert hashlib.sha256(photo.read_bytes()).hexdigest() == before
+    assert photo.stat().st_mtime_ns == mtime
+    assert not list(tmp_path.glob("out/left01/*.tmp"))
+
+
+def test_bad_inputs_get_one_line_each_and_do_not_stop_the_good_one(tmp_path, data_dir, photo):
+    reasons = bad_inputs(tmp_path, data_dir)
+    paths = [tmp_path / n for n in reasons]
+    out = run("analyze", *paths, photo, "--out", tmp_path / "out")
+    assert out.returncode == 1
+    assert "Traceback" not in out.stderr
+    lines = [ln for ln in out.stderr.splitlines() if ln.strip()]
+    assert len(lines) == len(reasons), out.stderr
+    for line, (name, reason) in zip(lines, reasons.items()):
+        assert line.startswith("forensics: error: ") and name in line and reason in line
+    assert (tmp_path / "out" / "left01" / "findings.json").exists()
+
+
+def test_same_stem_twice_gets_distinct_folders(tmp_path, data_dir):
+    a, b = tmp_path / "a", tmp_path / "b"
+    a.mkdir(), b.mkdir()
+    (a / "x.jpg").write_bytes((data_dir / "calibration" / "left01.jpg").read_bytes())
+    (b / "x.jpg").write_bytes((data_dir / "calibration" / "left02.jpg").read_bytes())
+    out = run("analyze", a / "x.jpg", b / "x.jpg", "--out", tmp_path / "out", "--detectors", "none_at_all")
+    assert out.returncode == 0, out.stderr
+    assert len(list((tmp_path / "out").glob("x*/findings.json"))) == 2
+
+
+def test_usage_errors_exit_2_without_traceback(photo, tmp_path):
+    for args in (["--format", "docx"], ["--param", "lens_distortion.no_such=1"], ["--param", "garbled"]):
+        out = run("analyze", photo, "--out", tmp_path, *args)
+        assert out.returncode == 2, (args, out.stderr)
+        assert "Traceback" not in out.stderr
+
+
+def test_unknown_detector_warns_and_is_recorded(photo, tmp_path):
+    out = run("analyze", photo, "--out", tmp_path, "--detectors", "nope")
+    assert out.returncode == 0
+    assert "detector nope: not available" in out.stderr
+    doc = json.loads((tmp_path / "left01" / "findings.json").read_text())
+    assert doc["detectors"][0]["status"] == "error"
+
+
+def test_internal_errors_are_one_line(tmp_path, photo):
+    out_file = tmp_path / "occupied"
+    out_file.write_text("a file where the output folder should be")
+    out = run("analyze", photo, "--out", out_file / "sub")
+    assert out.returncode != 0
+    assert "Traceback" not in out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1

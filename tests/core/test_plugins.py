@@ -1,0 +1,132 @@
+"""Plugin discovery and failure containment, through real entry points."""
+
+import json
+from importlib.metadata import EntryPoint
+
+from click.testing import CliRunner
+from conftest import fixture_host
+
+from forensics_core import ENTRY_POINT_GROUP, Status, VerdictLabel, analyze
+from forensics_core.cli import cli
+from forensics_core.plugins import PluginHost
+
+
+def by_name(findings):
+    return {d.name: d for d in findings.detectors}
+
+
+def test_bundled_plugins_come_from_the_public_entry_point_group():
+    host = PluginHost.from_entry_points(allow=None, deny=())
+    record = host.records["lens_distortion"]
+    assert record.status == "loaded"
+    assert record.distribution == "forensics"
+    assert "lens_distortion" in host.detectors
+
+
+def test_allow_and_deny_lists_from_the_environment(monkeypatch):
+    monkeypatch.setenv("FORENSICS_DISABLE_PLUGINS", "lens_distortion")
+    host = PluginHost.from_entry_points()
+    assert host.records["lens_distortion"].status == "disabled"
+    assert "lens_distortion" not in host.detectors
+    monkeypatch.delenv("FORENSICS_DISABLE_PLUGINS")
+    monkeypatch.setenv("FORENSICS_PLUGINS", "nothing_by_that_name")
+    assert PluginHost.from_entry_points().detectors == {}
+
+
+def test_a_raising_detector_is_recorded_and_the_others_survive(photo):
+    host = fixture_host("good", "raising")
+    findings = by_name(analyze(photo, host=host, timeout=30))
+    assert findings["good"].status is Status.OK
+    assert findings["raising"].status is Status.ERROR
+    assert "RuntimeError: boom in the detector" in findings["raising"].error
+    assert "Traceback" in findings["raising"].details["traceback"]
+
+
+def test_a_hanging_detector_is_stopped_at_its_time_limit(photo):
+    host = fixture_host("good", "hanging")
+    findings = by_name(analyze(photo, host=host, timeout=1.5))
+    assert findings["hanging"].status is Status.ERROR
+    assert "timed out after 1.5 s" in findings["hanging"].error
+    assert findings["hanging"].elapsed_s < 10
+    assert findings["good"].status is Status.OK
+
+
+def test_inline_isolation_also_reports_the_time_limit(photo):
+    host = fixture_host("hanging")
+    finding = analyze(photo, host=host, timeout=0.5, isolation="inline").detectors[0]
+    assert finding.status is Status.ERROR and "timed out" in finding.error
+
+
+def test_garbage_and_out_of_range_results_are_refused(photo, validate):
+    host = fixture_host("garbage", "out_of_range", "good")
+    result = analyze(photo, host=host, timeout=30)
+    findings = by_name(result)
+    assert "expected a DetectorResult, got dict" in findings["garbage"].error
+    assert "outside [0, 1]" in findings["out_of_range"].error
+    assert findings["good"].status is Status.OK
+    validate(result)
+
+
+def test_a_crashing_detector_costs_only_itself(photo):
+    findings = by_name(analyze(photo, host=fixture_host("crashing", "good"), timeout=30))
+    assert "died" in findings["crashing"].error
+    assert findings["good"].status is Status.OK
+
+
+def test_a_detector_cannot_write_to_the_evidence(photo):
+    finding = analyze(photo, host=fixture_host("mutating"), timeout=30, isolation="inline").detectors[0]
+    assert finding.status is Status.ERROR
+    assert "read-only" in finding.error
+
+
+def test_broken_plugins_are_recorded_not_fatal(photo, validate):
+    host = fixture_host("good", "bad_registration", "typo", "wrong_args")
+    host.load_entry_point(EntryPoint("broken", "broken_import_plugin", ENTRY_POINT_GROUP))
+    host.load_entry_point(EntryPoint("missing", "no_such_module_anywhere:plugin", ENTRY_POINT_GROUP))
+    records = host.records
+    assert records["broken"].status == "error" and "needs a library" in records["broken"].error
+    assert records["missing"].status == "error" and "ModuleNotFoundError" in records["missing"].error
+    assert "cannot register" in records["bad_registration"].error
+    assert "unknown hook(s) forensics_analyse" in records["typo"].error
+    assert "invalid hooks" in records["wrong_args"].error
+    assert records["good"].status == "loaded"
+    result = analyze(photo, host=host, timeout=30)
+    doc = validate(result)
+    assert {p["name"]: p["status"] for p in doc["plugins"]}["broken"] == "error"
+    assert by_name(result)["good"].status is Status.OK
+
+
+def test_detector_name_clash_is_a_load_error():
+    host = fixture_host("good")
+    host.load_entry_point(EntryPoint("good_again", "fixture_plugins:good", ENTRY_POINT_GROUP))
+    assert host.records["good_again"].status == "error"
+    assert "already" in host.records["good_again"].error
+
+
+def test_unknown_detector_is_an_error_finding(photo):
+    finding = analyze(photo, ["nope"], host=fixture_host("good")).detectors[0]
+    assert finding.status is Status.ERROR and "no loaded plugin provides detector 'nope'" in finding.error
+
+
+def test_a_failing_fusion_plugin_gives_an_inconclusive_verdict(photo):
+    host = fixture_host("good", "raising_fusion")
+    verdict = analyze(photo, host=host).verdict
+    assert verdict.label is VerdictLabel.INCONCLUSIVE
+    assert "fusion broke" in verdict.explanation
+
+
+def test_extra_metadata_hook(photo):
+    result = analyze(photo, host=fixture_host("metadata", "good"))
+    assert result.evidence.extra_metadata["metadata"] == {"bytes": photo.stat().st_size}
+
+
+def test_plugins_command_lists_status_and_errors(monkeypatch):
+    result = CliRunner().invoke(cli, ["plugins", "--json"])
+    assert result.exit_code == 0, result.output
+    payload = json.loads(result.output)
+    assert payload["entry_point_group"] == ENTRY_POINT_GROUP
+    names = {p["name"]: p for p in payload["plugins"]}
+    assert names["lens_distortion"]["status"] == "loaded"
+    assert "forensics_analyze" in names["lens_distortion"]["hooks"]
+    table = CliRunner().invoke(cli, ["plugins"])
+    assert table.exit_code == 0 and "lens_distortion" in table.output
