@@ -188,7 +188,10 @@ def trim_to_shortest(lines: Sequence[np.ndarray]) -> list[np.ndarray]:
     Returns
     -------
     list of ndarray, each shape (M_j, 2), M_j <= N_j
+        Empty when ``lines`` is empty.
     """
+    if not lines:
+        return []
     arcs = [np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(p, axis=0).T)))) for p in lines]
     shortest = min(s[-1] for s in arcs)
     return [

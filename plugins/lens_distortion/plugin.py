@@ -1,1 +1,26 @@
-"""Hook implementations of the lens distortion detector (filled in by the lens issue)."""
+"""Hook implementations of the lens distortion plugin (entry point ``lens_distortion``)."""
+
+from __future__ import annotations
+
+from forensics_core import hookimpl
+
+from .detector import NAME, SPEC, analyse
+
+
+@hookimpl
+def forensics_register_detectors():
+    return [SPEC]
+
+
+@hookimpl
+def forensics_analyze(detector, evidence, params):
+    if detector != NAME:
+        return None
+    return analyse(evidence.luma, params)
+
+
+@hookimpl
+def forensics_register_commands(cli):
+    from .synth import synth_command
+
+    cli.add_command(synth_command, "synth")

@@ -1,0 +1,242 @@
+"""The lens distortion detector: from a photo's luma to a typed result.
+
+Stages: sub-pixel edges (:mod:`.edges`), distorted straight lines
+(:mod:`.lines`), per-line ``k1`` by both estimators (:mod:`.k1`), and the
+global-model consistency test (:mod:`.consistency`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from forensics_core import DetectorResult, DetectorSpec, Status
+
+from .consistency import ConsistencyResult, assess
+from .edges import subpixel_edges
+from .geometry import norm_scale, to_normalised
+from .k1 import k1_joint, k1_paper, signed_distance, trim_to_shortest
+from .lines import DistortedLine, extract_lines
+
+NAME = "lens_distortion"
+VERSION = "0.1.0"
+
+REFERENCES = (
+    "H. R. Chennamma, L. Rangarajan, Image splicing detection using inherent lens radial distortion, "
+    "IJCSI 7(6), 2010.",
+    "F. Devernay, A non-maxima suppression method for edge detection with sub-pixel accuracy, "
+    "INRIA RR-2724, 1995.",
+    "F. Devernay, O. Faugeras, Straight lines have to be straight, Machine Vision and Applications 13, 2001.",
+)
+
+DEFAULT_PARAMS: dict[str, Any] = {
+    "sigma": 1.0,
+    "min_length_fraction": 1 / 3,
+    "tolerance_px": 1.5,
+    "max_k1": 0.35,
+    "alpha": 0.01,
+    "min_lines": 6,
+    "single_lines": False,
+    "paper_trim": True,
+    "points_per_line": 48,
+}
+
+SPEC = DetectorSpec(
+    name=NAME,
+    version=VERSION,
+    description="Checks that every straight line bends as one lens' radial distortion predicts.",
+    references=REFERENCES,
+    default_params=DEFAULT_PARAMS,
+)
+
+
+@dataclass(frozen=True)
+class _Timer:
+    marks: dict[str, float]
+
+    def lap(self, stage: str, since: float) -> float:
+        now = time.perf_counter()
+        self.marks[stage] = round(now - since, 4)
+        return now
+
+
+def _decimate(points: np.ndarray, n: int) -> np.ndarray:
+    """At most ``n`` points evenly spread along a line, both ends kept."""
+    if len(points) <= n:
+        return points
+    return points[np.linspace(0, len(points) - 1, n).round().astype(int)]
+
+
+def _rounded(a: np.ndarray | float, digits: int) -> Any:
+    return np.round(a, digits).tolist() if isinstance(a, np.ndarray) else round(float(a), digits)
+
+
+def _none_if_nan(x: float) -> float | None:
+    return None if not np.isfinite(x) else float(x)
+
+
+def _line_records(lines: list[DistortedLine], shape: tuple[int, int], result: ConsistencyResult,
+                  params: Mapping[str, Any]) -> list[dict[str, Any]]:
+    scale = norm_scale(shape)
+    norm = [to_normalised(line.points, shape) for line in lines]
+    paper_input = trim_to_shortest(norm) if params["paper_trim"] else norm
+    records = []
+    for i, (line, pts) in enumerate(zip(lines, norm)):
+        joint = k1_joint(pts, scale)
+        dep = result.departures[i]
+        records.append({
+            "id": i + 1,
+            "endpoints_px": _rounded(line.points[[0, -1]], 2),
+            "points_px": _rounded(_decimate(line.points, int(params["points_per_line"])), 2),
+            "distance": round(signed_distance(pts), 4),
+            "length_px": round(line.length_px, 1),
+            "n_points": len(line.points),
+            "pieces": line.pieces,
+            "k1": _none_if_nan(joint.k1),
+            "k1_stderr": _none_if_nan(joint.k1_stderr),
+            "k1_paper": _none_if_nan(k1_paper(paper_input[i])),
+            "residual_rms_px": _none_if_nan(joint.residual_rms_px),
+            "k1_model": _none_if_nan(dep.k1),
+            "delta_k1": _none_if_nan(dep.delta_k1),
+            "delta_k1_stderr": _none_if_nan(dep.delta_k1_stderr),
+            "z": _none_if_nan(dep.z),
+            "informative": bool(dep.informative),
+            "flagged": i in result.flagged_ids,
+        })
+    return records
+
+
+def _global_model(result: ConsistencyResult) -> dict[str, Any] | None:
+    m = result.model
+    if m is None:
+        return None
+    return {
+        "k1": m.k1, "k1_stderr": m.k1_stderr, "k2": m.k2, "k2_stderr": m.k2_stderr,
+        "cx": m.cx, "cx_stderr": m.cx_stderr, "cy": m.cy, "cy_stderr": m.cy_stderr,
+        "cx_px": m.cx * m.scale_px, "cy_px": m.cy * m.scale_px,
+        "sigma_px": m.sigma_px,
+        "n_lines_explained": m.n_lines_explained,
+        "n_lines_informative": m.n_lines_informative,
+        "units": "normalised: image centre at 0, half the larger side = 1; cx_px, cy_px in pixels from the centre",
+    }
+
+
+def _paper_rules(result: ConsistencyResult) -> dict[str, Any]:
+    r = result.paper_rules
+    return {
+        "a": {
+            "rule": "distortion symmetric and growing with distance from the centre",
+            "holds": not r.order_violations,
+            "violating_pairs": [[i + 1, j + 1] for i, j in r.order_violations],
+            "violating_line_ids": sorted({k + 1 for pair in r.order_violations for k in pair}),
+        },
+        "b": {
+            "rule": "the same sign of k1 on every line",
+            "holds": not r.sign_violators,
+            "sign": {1: "barrel", -1: "pincushion", 0: "undecided"}[int(r.sign)],
+            "violating_line_ids": [i + 1 for i in r.sign_violators],
+        },
+        "z_crit_sign": r.z_crit_sign,
+        "z_crit_order": r.z_crit_order,
+    }
+
+
+def _groups(result: ConsistencyResult) -> list[dict[str, Any]]:
+    return [
+        {"line_ids": [i + 1 for i in g.line_ids], "delta_k1": g.delta_k1, "delta_k1_stderr": g.delta_k1_stderr,
+         "z": _none_if_nan(g.z), "p_value": g.p_value, "heterogeneity_p": g.heterogeneity_p}
+        for g in result.groups
+        if g.flagged
+    ]
+
+
+def _regions(records: list[dict[str, Any]]) -> list[dict[str, float]]:
+    """Bounding box, pixels, of the flagged lines: where the pasted part is likely to be."""
+    flagged = [np.asarray(r["points_px"]) for r in records if r["flagged"]]
+    if not flagged:
+        return []
+    pts = np.vstack(flagged)
+    x0, y0 = pts.min(axis=0)
+    x1, y1 = pts.max(axis=0)
+    return [{"x0": round(float(x0), 1), "y0": round(float(y0), 1), "x1": round(float(x1), 1), "y1": round(float(y1), 1)}]
+
+
+def _summary(result: ConsistencyResult, records: list[dict[str, Any]]) -> str:
+    n_inf = sum(r["informative"] for r in records)
+    if result.verdict == "inconclusive":
+        return f"Inconclusive: {result.reason}."
+    m = result.model
+    if result.verdict == "inconsistent":
+        ids = ", ".join(str(i + 1) for i in result.flagged_ids)
+        kind = {"group": "a group of lines that agree with each other", "several lines": "several lines",
+                "single line": "a single line"}[result.evidence]
+        return (f"Line(s) {ids} ({kind}) depart from the lens model that explains {m.n_lines_explained} of "
+                f"{n_inf} informative lines (k1 = {m.k1:.3f} ± {m.k1_stderr:.3f}; image-level p = {result.p_value:.2g}).")
+    if result.flagged_ids:
+        ids = ", ".join(str(i + 1) for i in result.flagged_ids)
+        return (f"The {n_inf} informative lines fit one lens model (k1 = {m.k1:.3f} ± {m.k1_stderr:.3f}) except "
+                f"line(s) {ids}, which depart on their own; a single line may be a curved object, so the examiner "
+                f"should look at it; no group of lines departs (image-level p = {result.p_value:.2g}).")
+    return (f"All {n_inf} informative lines fit one lens model (k1 = {m.k1:.3f} ± {m.k1_stderr:.3f}); "
+            f"no line or group departs significantly (image-level p = {result.p_value:.2g}).")
+
+
+def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
+    """Run the detector on a photo's luma.
+
+    Parameters
+    ----------
+    luma : ndarray, shape (H, W)
+        Luma in [0, 1], stored pixel grid.
+    params : mapping
+        :data:`DEFAULT_PARAMS` with the user's overrides.
+
+    Returns
+    -------
+    DetectorResult
+        ``ok`` with the image-level p-value of the consistency test and
+        ``score = 1 - p``; ``inconclusive`` when too few informative lines.
+    """
+    shape = luma.shape[:2]
+    timer = _Timer({})
+    t = time.perf_counter()
+    edges = subpixel_edges(luma, sigma=float(params["sigma"]))
+    t = timer.lap("edges", t)
+    lines = extract_lines(edges, shape, float(params["min_length_fraction"]) * shape[0],
+                          max_k1=float(params["max_k1"]), tolerance_px=float(params["tolerance_px"]))
+    t = timer.lap("lines", t)
+    result = assess([line.points for line in lines], shape, alpha=float(params["alpha"]),
+                    min_lines=int(params["min_lines"]), single_lines=bool(params["single_lines"]))
+    t = timer.lap("consistency", t)
+    records = _line_records(lines, shape, result, params)
+    timer.lap("per_line_k1", t)
+
+    details = {
+        "lines": records,
+        "global_model": _global_model(result),
+        "p_value": result.p_value if result.informative else None,
+        "alpha": result.alpha,
+        "test": result.test,
+        "evidence": result.evidence,
+        "flagged_line_ids": [i + 1 for i in result.flagged_ids],
+        "flagged_groups": _groups(result),
+        "regions_px": _regions(records),
+        "paper_rules": _paper_rules(result),
+        "n_edge_points": int(len(edges.xy)),
+        "image_shape": list(shape),
+        "scale_px": norm_scale(shape),
+        "elapsed_s": timer.marks,
+    }
+    if not result.informative:
+        return DetectorResult(Status.INCONCLUSIVE, _summary(result, records), details=details)
+    return DetectorResult(
+        status=Status.OK,
+        summary=_summary(result, records),
+        score=1.0 - result.p_value,
+        p_value=result.p_value,
+        details=details,
+    )

@@ -1,0 +1,130 @@
+"""Figures of the lens distortion finding for the report.
+
+Both are drawn from the finding's ``details`` alone (plus the photo for the
+overlay), so a report can be rebuilt from ``findings.json`` and the evidence.
+"""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from PIL import Image, ImageDraw
+
+OVERLAY_MAX_SIDE = 1600
+
+# Colour by how far a line departs from the global model (|z|), and red for
+# the lines the test flagged, so the figure and the table say the same thing.
+COLOURS = {
+    "flagged": (220, 30, 30),
+    "strong": (245, 150, 20),
+    "consistent": (30, 170, 60),
+    "uninformative": (120, 140, 230),
+}
+
+
+def line_class(line: Mapping[str, Any]) -> str:
+    """Colour class of one line record: flagged, strong (|z| >= 2), consistent or uninformative."""
+    if line.get("flagged"):
+        return "flagged"
+    z = line.get("z")
+    if z is None or not line.get("informative", True):
+        return "uninformative"
+    return "strong" if abs(z) >= 2.0 else "consistent"
+
+
+def _grey_rgb(pixels: np.ndarray) -> Image.Image:
+    """The stored grid as a dimmed RGB image, so coloured lines stand out."""
+    arr = np.asarray(pixels)
+    if arr.dtype != np.uint8:
+        arr = (arr.astype(np.float64) / max(float(arr.max()), 1.0) * 255.0).astype(np.uint8)
+    if arr.ndim == 3:
+        arr = arr[..., :3] if arr.shape[2] >= 3 else np.repeat(arr[..., :1], 3, axis=2)
+    else:
+        arr = np.repeat(arr[..., None], 3, axis=2)
+    return Image.fromarray((arr * 0.6 + 40).astype(np.uint8))
+
+
+def overlay_png(pixels: np.ndarray, details: Mapping[str, Any]) -> bytes:
+    """The photo with every extracted line drawn, numbered and coloured by its consistency.
+
+    Parameters
+    ----------
+    pixels : ndarray, shape (H, W) or (H, W, C)
+        The evidence's stored grid.
+    details : mapping
+        The finding's details (``lines`` with ``points_px`` in pixels).
+
+    Returns
+    -------
+    bytes
+        PNG, longest side at most :data:`OVERLAY_MAX_SIDE` pixels.
+    """
+    img = _grey_rgb(pixels)
+    factor = min(1.0, OVERLAY_MAX_SIDE / max(img.size))
+    if factor < 1.0:
+        img = img.resize((round(img.width * factor), round(img.height * factor)), Image.Resampling.LANCZOS)
+    draw = ImageDraw.Draw(img)
+    width = max(2, round(max(img.size) / 400))
+    for line in details.get("lines", []):
+        pts = np.asarray(line["points_px"], dtype=np.float64) * factor
+        colour = COLOURS[line_class(line)]
+        draw.line([tuple(p) for p in pts], fill=colour, width=width)
+        x, y = pts[len(pts) // 2]
+        label = str(line["id"])
+        box = draw.textbbox((x, y), label)
+        draw.rectangle((box[0] - 2, box[1] - 1, box[2] + 2, box[3] + 1), fill=(255, 255, 255))
+        draw.text((x, y), label, fill=colour)
+    out = io.BytesIO()
+    img.save(out, format="PNG", optimize=True)
+    return out.getvalue()
+
+
+def k1_plot_svg(details: Mapping[str, Any]) -> bytes:
+    """k1 of each line against its signed distance from the centre (cf. the paper's Figs. 9-14).
+
+    Filled markers with 1-sigma error bars: the joint estimator; hollow
+    markers: the paper's estimator; the band: the global model's k1 ± 1
+    standard error (a line's expected k1 also depends on k2 and the centre,
+    which the band does not show).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    matplotlib.rcParams["svg.hashsalt"] = "forensics"
+    lines = [ln for ln in details.get("lines", []) if ln.get("k1") is not None]
+    fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=100)
+    model = details.get("global_model")
+    if model:
+        ax.axhspan(model["k1"] - model["k1_stderr"], model["k1"] + model["k1_stderr"], color="0.85", zorder=0)
+        ax.axhline(model["k1"], color="0.4", lw=1, label=f"global model k1 = {model['k1']:.3f}")
+    for cls, colour in COLOURS.items():
+        sel = [ln for ln in lines if line_class(ln) == cls]
+        if not sel:
+            continue
+        d = np.array([ln["distance"] for ln in sel])
+        k = np.array([ln["k1"] for ln in sel])
+        se = np.array([ln["k1_stderr"] if ln["k1_stderr"] is not None else 0.0 for ln in sel])
+        ax.errorbar(d, k, yerr=se, fmt="o", ms=4, color=np.array(colour) / 255, capsize=2, label=f"{cls} (joint)")
+        paper = [(ln["distance"], ln["k1_paper"]) for ln in sel if ln.get("k1_paper") is not None]
+        if paper:
+            pd_, pk = zip(*paper)
+            ax.scatter(pd_, pk, s=18, facecolors="none", edgecolors=np.array(colour) / 255)
+    if lines:
+        ks = np.array([ln["k1"] for ln in lines])
+        lo, hi = np.percentile(ks, [2, 98])
+        pad = max(0.05, 0.2 * (hi - lo))
+        ax.set_ylim(lo - pad, hi + pad)
+    ax.set_xlabel("signed distance from the image centre (normalised)")
+    ax.set_ylabel("k1 (hollow: paper's estimator)")
+    ax.axvline(0, color="0.7", lw=0.5)
+    ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    out = io.BytesIO()
+    fig.savefig(out, format="svg", metadata={"Date": None})
+    plt.close(fig)
+    return out.getvalue()
