@@ -8,17 +8,23 @@ STAMP  := $(VENV)/.installed
 SAMPLE ?= tests/data/exif/87_OSError.jpg
 OUT    ?= out
 
-.PHONY: demo test bench check-python clean
+# WeasyPrint needs Pango (and HarfBuzz' subsetter, and a font); the tests use
+# poppler's pdfsig, pdftoppm, pdftotext, pdfinfo and pdfdetach, and openssl.
+SYSTEM_PACKAGES := libpango-1.0-0 libpangoft2-1.0-0 libharfbuzz-subset0 fonts-dejavu-core poppler-utils openssl
+
+.PHONY: demo test bench check-python system-packages clean
 
 demo: $(STAMP)
-	$(PY) -m forensics_core analyze $(SAMPLE) --out $(OUT)
-	@echo "outputs: $(OUT)/$(basename $(notdir $(SAMPLE)))/"
+	$(PY) -m forensics_core analyze $(SAMPLE) --out $(OUT) --case-id DEMO-1 --exhibit-id 1
+	$(PY) -m forensics_core verify $(OUT)/$(basename $(notdir $(SAMPLE))) --evidence $(SAMPLE)
+	@echo "outputs: $(OUT)/$(basename $(notdir $(SAMPLE)))/ (findings.json, report.html, report.pdf, manifest.json, manifest.json.p7s)"
 
 test: $(STAMP)
 	$(PY) -m pytest
 
 bench: $(STAMP)
 	$(PY) benchmarks/lens.py
+	$(PY) benchmarks/report.py
 
 check-python:
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "forensics needs Python >= 3.11; set PYTHON=python3.11 or newer")'
@@ -27,10 +33,23 @@ check-python:
 	    apt-get update -qq && apt-get install -y -qq python3-venv; \
 	  else echo "missing system package: python3-venv (sudo apt-get install python3-venv)"; exit 1; fi; }
 
+system-packages:
+	@missing=""; \
+	libs=$$( { ldconfig -p || /sbin/ldconfig -p; } 2>/dev/null ); \
+	echo "$$libs" | grep -q 'libpango-1.0.so.0' || missing="$$missing pango"; \
+	echo "$$libs" | grep -q 'libharfbuzz-subset.so.0' || missing="$$missing harfbuzz-subset"; \
+	for tool in pdfsig pdftoppm pdftotext pdfinfo pdfdetach openssl fc-list; do \
+	  command -v $$tool >/dev/null || missing="$$missing $$tool"; done; \
+	if [ -n "$$missing" ]; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(SYSTEM_PACKAGES) >/dev/null; \
+	  else echo "missing system packages (for$$missing): sudo apt-get install $(SYSTEM_PACKAGES)"; exit 1; fi; \
+	fi
+
 $(PY): | check-python
 	$(PYTHON) -m venv $(VENV)
 
-$(STAMP): pyproject.toml | $(PY)
+$(STAMP): pyproject.toml | $(PY) system-packages
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[test]'
 	touch $@

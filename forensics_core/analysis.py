@@ -10,6 +10,7 @@ the runaway thread cannot be stopped.
 
 from __future__ import annotations
 
+import faulthandler
 import multiprocessing
 import os
 import platform
@@ -121,6 +122,9 @@ def resolve_params(host: PluginHost, options: Options) -> dict[str, dict[str, An
 
 
 def _child(call: Callable[[], Any], conn) -> None:
+    # A crash of the detector is reported in its finding; an inherited fault
+    # handler would also dump the interpreter's state onto the user's terminal.
+    faulthandler.disable()
     try:
         outcome = ("value", call())
     except BaseException as exc:

@@ -26,8 +26,23 @@ from .analysis import DEFAULT_TIMEOUT_S, ISOLATIONS, Options, analyze_evidence, 
 from .evidence import DEFAULT_MAX_PIXELS, EvidenceError, load_evidence
 from .output import output_dir_for, write_findings
 from .plugins import PluginHost, one_line
+from .report.render import PAPER_SIZES, ReportOptions
+from .signing import (
+    KEY_TYPES,
+    PASSWORD_ENV,
+    ExaminerKey,
+    SigningError,
+    config_dir,
+    create_self_signed,
+    default_key,
+    default_key_path,
+    fingerprint,
+    load_key,
+    write_key_files,
+)
 
-FORMATS = ("json",)
+FORMATS = ("json", "html", "pdf")
+REPORT_FORMATS = ("html", "pdf")
 
 err_console = Console(stderr=True, highlight=False)
 
@@ -91,13 +106,67 @@ def cli() -> None:
     """
 
 
+class ReportError(Exception):
+    """The report of one photo could not be made; the message is one line."""
+
+
+def _password_from_env() -> bytes | None:
+    value = os.environ.get(PASSWORD_ENV)
+    return value.encode("utf-8") if value is not None else None
+
+
+def _signing_key(key_path: Path | None, examiner: str | None, organisation: str | None) -> ExaminerKey:
+    """The key that signs the reports: ``--key``, else the per-user key (made on first use).
+
+    The password comes from the environment; without one a key that needs one
+    is asked for on the terminal.
+    """
+    password = _password_from_env()
+
+    def load(pw: bytes | None) -> ExaminerKey:
+        return load_key(key_path, pw) if key_path is not None else default_key(examiner, organisation, pw)
+
+    try:
+        try:
+            key = load(password)
+        except SigningError:
+            if password is not None or not sys.stdin.isatty():
+                raise
+            key = load(click.prompt(f"password of {key_path or default_key_path()}", hide_input=True,
+                                    err=True).encode("utf-8"))
+    except SigningError as exc:
+        raise click.BadParameter(str(exc), param_hint="--key") from None
+    if key.created_now:
+        click.echo(f"forensics: made a self-signed examiner key for trial use: {key.source} "
+                   f"(SHA-256 {key.fingerprint}); see `forensics keys create` and --key")
+    return key
+
+
+def _write_report(findings, evidence, folder: Path, key: ExaminerKey, host: PluginHost, formats: list[str],
+                  options, organisation: str | None, tsa_url: str | None) -> None:
+    from .report.bundle import write_bundle
+
+    try:
+        result = write_bundle(findings, evidence, folder, key, formats=formats, host=host, options=options,
+                              organisation=organisation, tsa_url=tsa_url)
+    except OSError:
+        raise  # reported by the caller as "cannot write output", like findings.json
+    except Exception as exc:  # rendering or signing failed for this photo; the others go on
+        if os.environ.get("FORENSICS_DEBUG"):
+            raise
+        raise ReportError(one_line(exc)) from None
+    for url in result.refused_urls:
+        _fail_line(str(folder), f"the PDF renderer was refused {url[:100]!r} (only data: URLs are allowed)")
+
+
 @cli.command()
 @click.argument("photos", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Output folder; each photo gets OUT/<photo stem>/.")
 @click.option("--detectors", help="Comma-separated detector names (default: all installed).")
-@click.option("--format", "formats", default="json", show_default=True,
-              help=f"Comma-separated output formats: {', '.join(FORMATS)}.")
+@click.option("--format", "formats", default=",".join(FORMATS), show_default=True,
+              help=f"Comma-separated output formats: {', '.join(FORMATS)}. html and pdf also write the signed "
+                   "manifest.json and manifest.json.p7s.")
 @click.option("--case-id", help="Case identifier carried into the findings.")
 @click.option("--examiner", help="Examiner's name carried into the findings.")
 @click.option("--param", "params", multiple=True, metavar="DETECTOR.KEY=VALUE",
@@ -109,12 +178,22 @@ def cli() -> None:
 @click.option("--fusion", default="bonferroni", show_default=True, help="Fusion policy for the verdict.")
 @click.option("--isolation", type=click.Choice(ISOLATIONS), default="process", show_default=True,
               help="Run each detector in a child process (killable at the time limit) or inline.")
+@click.option("--exhibit-id", help="Exhibit identifier printed on every page of the report.")
+@click.option("--organisation", help="Examiner's organisation for the signature block (default: the certificate's).")
+@click.option("--key", "key_path", type=click.Path(dir_okay=False, exists=True, path_type=Path),
+              help=f"Signing key, PKCS#12 (password from ${PASSWORD_ENV} or a prompt). Default: the per-user "
+                   "self-signed key, made on first use.")
+@click.option("--paper", type=click.Choice(sorted(PAPER_SIZES)), default="a4", show_default=True, help="PDF paper size.")
+@click.option("--tsa", "tsa_url", metavar="URL", help="RFC 3161 time-stamping service for the signatures (default: none).")
 @click.pass_context
-def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params, timeout, max_pixels, fusion, isolation):
-    """Analyse PHOTO... and write OUT/<photo stem>/findings.json for each.
+def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params, timeout, max_pixels, fusion, isolation,
+            exhibit_id, organisation, key_path, paper, tsa_url):
+    """Analyse PHOTO... and write OUT/<photo stem>/findings.json for each,
+    with the signed report (report.html, report.pdf, manifest.json and its
+    signature) beside it.
 
     Exits 0 when every photo was analysed, whatever the verdict; 1 when some
-    photo could not be taken in.
+    photo could not be taken in or its outputs could not be written.
     """
     host: PluginHost = ctx.find_root().command.host
     wanted_formats = _split_list(formats) or []
@@ -131,6 +210,8 @@ def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params,
         resolve_params(host, options)
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="--param") from None
+    report_formats = [f for f in REPORT_FORMATS if f in wanted_formats]
+    key = _signing_key(key_path, examiner, organisation) if report_formats else None
     for name in options.detectors or []:
         if name not in host.detectors:
             _fail_line(f"detector {name}", "not available; it is recorded as an error in the findings "
@@ -150,12 +231,18 @@ def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params,
                 findings = analyze_evidence(evidence, host, options)
                 target = output_dir_for(out_dir, photo, evidence.info.sha256, used)
                 path = write_findings(findings, target)
+                if key is not None:
+                    _write_report(findings, evidence, target, key, host, report_formats,
+                                  ReportOptions(exhibit_id=exhibit_id, paper=paper), organisation, tsa_url)
             except EvidenceError as exc:
                 failures += 1
                 _fail_line(str(photo), str(exc))
             except OSError as exc:
                 failures += 1
                 _fail_line(str(photo), f"cannot write output: {exc.strerror or exc}")
+            except ReportError as exc:
+                failures += 1
+                _fail_line(str(photo), f"cannot write the report: {exc}")
             else:
                 v = findings.verdict
                 click.echo(f"{photo}: {v.label.value} -> {path}")
@@ -188,13 +275,82 @@ def plugins_command(ctx, as_json):
         return
     table = Table(title=f"plugins (entry-point group {ENTRY_POINT_GROUP})")
     for col in ("plugin", "distribution", "status", "detectors", "hooks", "error"):
-        table.add_column(col)
+        # Fold rather than truncate: an error message must be shown whole.
+        table.add_column(col, overflow="fold", no_wrap=col == "plugin", min_width=len(col))
     for r in records:
         dist = f"{r.distribution} {r.version}" if r.distribution else "-"
         cells = (r.name, dist, r.status, ", ".join(r.detectors) or "-",
                  ", ".join(h.removeprefix("forensics_") for h in r.hooks) or "-", r.error or "")
         table.add_row(*(escape(c) for c in cells))
     Console(highlight=False).print(table)
+
+
+@cli.group("keys")
+def keys_group() -> None:
+    """Manage examiner signing keys."""
+
+
+@keys_group.command("create")
+@click.option("--name", required=True, help="Examiner's name (the certificate's common name).")
+@click.option("--org", "organisation", required=True, help="Organisation (the certificate's O).")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+              help="Folder for examiner.p12 and examiner.pem (default: the per-user configuration folder, "
+                   "which makes it the default signing key).")
+@click.option("--key-type", type=click.Choice(KEY_TYPES), default=KEY_TYPES[0], show_default=True)
+def keys_create(name, organisation, out_dir, key_type):
+    """Make a self-signed examiner certificate and PKCS#12, for trial use.
+
+    The PKCS#12 is protected with the password in $FORENSICS_KEY_PASSWORD,
+    else one asked for on the terminal (empty: none). A court will want a
+    certificate issued by your organisation instead: use it with --key.
+    """
+    password = _password_from_env()
+    if password is None and sys.stdin.isatty():
+        password = click.prompt("password for the new key (empty: none)", hide_input=True,
+                                confirmation_prompt=True, default="", show_default=False, err=True).encode("utf-8")
+    folder = out_dir or config_dir()
+    try:
+        p12, cert = create_self_signed(name, organisation, key_type, password or None)
+        p12_path, pem_path = write_key_files(folder, p12, cert)
+    except SigningError as exc:
+        _fail_line("keys create", str(exc))
+        sys.exit(1)
+    except OSError as exc:
+        _fail_line("keys create", f"cannot write to {folder}: {exc.strerror or exc}")
+        sys.exit(1)
+    click.echo(f"key:         {p12_path}")
+    click.echo(f"certificate: {pem_path}")
+    click.echo(f"subject:     {cert.subject.rfc4514_string()} (self-signed, {key_type})")
+    click.echo(f"SHA-256:     {fingerprint(cert)}")
+
+
+@cli.command("verify")
+@click.argument("folder", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--evidence", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="The evidence photo; checked against the hashes the manifest records.")
+@click.option("--trust", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="Certificate (PEM or DER) the signatures must chain to. Without it the signer's own "
+                   "certificate is the anchor: integrity is checked, identity is not.")
+def verify_command(folder, evidence, trust):
+    """Check a report folder: both signatures, every file's hash, and the evidence.
+
+    Prints one line per failed check on stderr and exits 1 if any failed.
+    """
+    from .verify import verify_bundle
+
+    try:
+        result = verify_bundle(folder, evidence=evidence, trust=trust)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="--trust") from None
+    for line in result.passed:
+        click.echo(f"ok: {line}")
+    for note in result.notes:
+        click.echo(f"note: {note}")
+    for problem in result.problems:
+        _fail_line(problem.subject, problem.reason)
+    if not result.ok:
+        sys.exit(1)
+    click.echo(f"verified: {folder}")
 
 
 def main() -> None:

@@ -13,6 +13,12 @@ from forensics_core.plugins import PluginHost
 DATA = Path(__file__).parent / "data"
 
 
+@pytest.fixture(autouse=True)
+def private_home(tmp_path_factory, monkeypatch):
+    """Keep the per-user examiner key the CLI makes on first use out of the real home folder."""
+    monkeypatch.setenv("FORENSICS_HOME", str(tmp_path_factory.mktemp("forensics-home")))
+
+
 @pytest.fixture(scope="session")
 def data_dir() -> Path:
     return DATA

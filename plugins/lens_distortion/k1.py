@@ -47,6 +47,8 @@ __all__ = [
 # nothing about k1 (a radial line stays straight under radial distortion).
 _RADIAL_TOLERANCE = 1e-10
 
+_K1_STARTS = (0.0, -0.25, 0.25)  # starts of the single-line fit, normalised k1
+
 
 @dataclass(frozen=True)
 class LineK1:
@@ -442,5 +444,12 @@ def k1_joint(
     Returns
     -------
     LineK1
+
+    Notes
+    -----
+    The fit starts from several values of ``k1`` and keeps the one with the
+    smallest residual: on a line that fits the model poorly (a curved object)
+    the cost can have several minima, and a start at ``k1 = 0`` can stall.
     """
-    return fit_lines([points_norm], scale_px, k2=k2, centre=centre)[0]
+    fits = [fit_lines([points_norm], scale_px, k2=k2, centre=centre, k1_start=start)[0] for start in _K1_STARTS]
+    return min(fits, key=lambda f: (not np.isfinite(f.residual_rms_px), f.residual_rms_px))

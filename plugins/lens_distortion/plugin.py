@@ -20,6 +20,15 @@ def forensics_analyze(detector, evidence, params):
 
 
 @hookimpl
+def forensics_report_section(finding, evidence):
+    if finding.name != NAME or finding.details.get("paper_rules") is None:
+        return None
+    from .section import report_section
+
+    return report_section(finding, evidence)
+
+
+@hookimpl
 def forensics_register_commands(cli):
     from .synth import synth_command
 

@@ -1,0 +1,111 @@
+"""Images for the report: inline ``data:`` URLs at a resolution that keeps the PDF small.
+
+Every image in the report is embedded, so ``report.html`` is self-contained
+and the PDF renderer never fetches anything. Raster images are shown at
+most :data:`MAX_SIDE` pixels on their longer side: enough for an A4 page at
+about 200 dpi, and it keeps the PDF of a 12 MP photo around a megabyte.
+Full-resolution figures are written beside the report as files.
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+import warnings
+
+import numpy as np
+from PIL import ExifTags, Image
+
+from .sections import Figure
+
+MAX_SIDE = 1600
+_JPEG_QUALITY = 85
+# An EXIF thumbnail is at most 64 kB by the standard; anything much larger is not one.
+_MAX_THUMBNAIL_BYTES = 256 * 1024
+_MAX_THUMBNAIL_PIXELS = 1024 * 1024
+
+
+def data_url(data: bytes, mime: str) -> str:
+    return f"data:{mime};base64,{base64.b64encode(data).decode('ascii')}"
+
+
+def _jpeg(img: Image.Image) -> bytes:
+    buf = io.BytesIO()
+    img.convert("RGB").save(buf, "JPEG", quality=_JPEG_QUALITY, optimize=True)
+    return buf.getvalue()
+
+
+def _to_8bit(pixels: np.ndarray) -> np.ndarray:
+    """The stored grid as uint8 grey or RGB, for display only."""
+    px = pixels
+    if px.ndim == 3:
+        px = px[..., :3] if px.shape[2] >= 3 else px[..., 0]
+    if px.dtype == np.uint8:
+        return px
+    scale = {"uint16": 65535.0, "int32": 65535.0}.get(px.dtype.name, 1.0)
+    return np.clip(np.asarray(px, dtype=np.float32) / scale * 255.0 + 0.5, 0, 255).astype(np.uint8)
+
+
+def preview(pixels: np.ndarray, max_side: int = MAX_SIDE) -> bytes:
+    """A JPEG of the stored grid (orientation not applied), at most ``max_side`` pixels long."""
+    img = Image.fromarray(_to_8bit(pixels))
+    img.thumbnail((max_side, max_side), Image.Resampling.LANCZOS, reducing_gap=2.0)
+    return _jpeg(img)
+
+
+def for_report(figure: Figure, max_side: int = MAX_SIDE) -> tuple[bytes, str]:
+    """A plugin's figure as embedded in the report: large rasters reduced, SVG as given.
+
+    Raises
+    ------
+    ValueError
+        When the figure is not a PNG, JPEG or SVG, or does not decode.
+    """
+    if figure.mime == "image/svg+xml":
+        return figure.data, figure.mime
+    if figure.mime not in ("image/png", "image/jpeg"):
+        raise ValueError(f"figure type {figure.mime!r} is not image/png, image/jpeg or image/svg+xml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", Image.DecompressionBombWarning)
+        with Image.open(io.BytesIO(figure.data), formats=["PNG", "JPEG"]) as img:
+            if max(img.size) <= max_side:
+                img.verify()
+                return figure.data, figure.mime
+            img.load()
+            img.thumbnail((max_side, max_side), Image.Resampling.LANCZOS, reducing_gap=2.0)
+            return _jpeg(img), "image/jpeg"
+
+
+def embedded_thumbnail(data: bytes) -> bytes | None:
+    """The EXIF thumbnail (IFD1) of the evidence, re-encoded as JPEG, or None.
+
+    The offsets come from the evidence and are checked against the EXIF
+    block's length; the thumbnail is decoded by Pillow with a pixel limit,
+    and only the re-encoded pixels reach the report.
+    """
+    try:
+        with Image.open(io.BytesIO(data)) as img:
+            exif_block = img.info.get("exif")
+            if not exif_block:
+                return None
+            ifd1 = img.getexif().get_ifd(ExifTags.IFD.IFD1)
+    except (OSError, ValueError, SyntaxError, EOFError):
+        return None
+    offset, length = ifd1.get(ExifTags.Base.JpegIFOffset), ifd1.get(ExifTags.Base.JpegIFByteCount)
+    if not isinstance(offset, int) or not isinstance(length, int) or length <= 0 or length > _MAX_THUMBNAIL_BYTES:
+        return None
+    # Offsets in EXIF count from the TIFF header, which follows "Exif\0\0".
+    tiff = exif_block[6:] if exif_block.startswith(b"Exif\x00\x00") else exif_block
+    if offset < 0 or offset + length > len(tiff):
+        return None
+    blob = tiff[offset : offset + length]
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            with Image.open(io.BytesIO(blob), formats=["JPEG"]) as thumb:
+                if thumb.size[0] * thumb.size[1] > _MAX_THUMBNAIL_PIXELS:
+                    return None
+                thumb.load()
+                return _jpeg(thumb)
+    except (OSError, ValueError, SyntaxError, EOFError, Image.DecompressionBombWarning, Image.DecompressionBombError):
+        return None

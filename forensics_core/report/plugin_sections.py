@@ -1,0 +1,137 @@
+"""Detector sections: what each plugin contributes, rendered generically and contained.
+
+Each plugin's ``forensics_report_section`` is called on its own (through
+:meth:`PluginHost.call_each`), and its template is rendered in a sandboxed,
+autoescaping Jinja2 environment: a template cannot reach Python internals,
+and every value from ``context`` is escaped unless the plugin's own template
+text put the markup there. A plugin whose hook raises, returns something
+other than a :class:`ReportSection`, or whose template fails, gets a section
+that says so, followed by its finding in generic form; the report still renders.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+from jinja2 import StrictUndefined
+from jinja2.sandbox import ImmutableSandboxedEnvironment
+from markupsafe import Markup
+
+from ..evidence import Evidence
+from ..findings import DetectorFinding
+from ..plugins import PluginHost, one_line
+from . import images
+from .sections import Figure, ReportSection
+
+_SAFE_NAME = re.compile(r"[^A-Za-z0-9_.-]+")
+
+
+@dataclass
+class RenderedFigure:
+    """A figure as a template sees it: ``{{ figures.key }}`` renders it inline.
+
+    ``src`` (a ``data:`` URL) and ``caption`` are there for templates that lay
+    out the image themselves.
+    """
+
+    key: str
+    data_url: str
+    caption: str
+    file_name: str
+    used: bool = False
+
+    @property
+    def src(self) -> str:
+        self.used = True
+        return self.data_url
+
+    def __html__(self) -> str:
+        caption = Markup("<figcaption>{}</figcaption>").format(self.caption) if self.caption else ""
+        return Markup('<figure class="plugin-figure"><img src="{}" alt="{}">{}</figure>').format(
+            self.src, self.caption or self.key, caption)
+
+
+@dataclass
+class DetectorSection:
+    """One detector's section, ready for the report template.
+
+    Attributes
+    ----------
+    finding : DetectorFinding
+    title : str
+    body : Markup or None
+        The plugin's rendered template; None when the plugin gave none.
+    failure : str or None
+        Why the plugin's section could not be used, in one line.
+    figures : list of RenderedFigure
+        All figures; those the template did not place are shown after it.
+    files : dict of str to (bytes, str)
+        Full-resolution figure files to write beside the report: name to (data, mime).
+    """
+
+    finding: DetectorFinding
+    title: str
+    body: Markup | None = None
+    failure: str | None = None
+    figures: list[RenderedFigure] = field(default_factory=list)
+    files: dict[str, tuple[bytes, str]] = field(default_factory=dict)
+
+    @property
+    def unplaced_figures(self) -> list[RenderedFigure]:
+        return [f for f in self.figures if not f.used]
+
+
+class _Sandbox(ImmutableSandboxedEnvironment):
+    """Autoescaping sandbox; undefined names fail loudly so a plugin author sees the mistake."""
+
+    def __init__(self):
+        super().__init__(autoescape=True, undefined=StrictUndefined)
+
+
+_EXTENSIONS = {"image/png": "png", "image/jpeg": "jpg", "image/svg+xml": "svg"}
+
+
+def _figures(finding: DetectorFinding, figs: dict[str, Figure]) -> tuple[list[RenderedFigure], dict[str, tuple[bytes, str]]]:
+    rendered, files = [], {}
+    for key, fig in figs.items():
+        if not isinstance(fig, Figure):
+            raise TypeError(f"figure {key!r} is a {type(fig).__name__}, not a Figure")
+        data, mime = images.for_report(fig)
+        name = f"{_SAFE_NAME.sub('_', finding.name)}-{_SAFE_NAME.sub('_', str(key))}.{_EXTENSIONS[fig.mime]}"
+        files[name] = (fig.data, fig.mime)
+        rendered.append(RenderedFigure(str(key), images.data_url(data, mime), str(fig.caption), name))
+    return rendered, files
+
+
+def _render(finding: DetectorFinding, section: object) -> DetectorSection:
+    if not isinstance(section, ReportSection):
+        raise TypeError(f"returned a {type(section).__name__}, not a ReportSection")
+    figures, files = _figures(finding, dict(section.figures))
+    template = _Sandbox().from_string(str(section.template))
+    body = Markup(template.render(**dict(section.context), figures={f.key: f for f in figures}, finding=finding))
+    return DetectorSection(finding, str(section.title), body=body, figures=figures, files=files)
+
+
+def _failed(finding: DetectorFinding, reason: str) -> DetectorSection:
+    return DetectorSection(finding, f"{finding.name}: report section failed", failure=reason)
+
+
+def section_for(host: PluginHost | None, finding: DetectorFinding, evidence: Evidence) -> DetectorSection:
+    """The section of one finding, from the plugin that registered its detector.
+
+    Never raises: whatever the plugin does wrong becomes the section's ``failure``.
+    """
+    if host is None or finding.plugin not in host.records:
+        return DetectorSection(finding, finding.name)
+    for outcome in host.call_each("forensics_report_section", plugins=[finding.plugin],
+                                  finding=finding, evidence=evidence):
+        if outcome.error is not None:
+            return _failed(finding, f"its report hook raised {one_line(outcome.error)}")
+        if outcome.value is None:
+            continue
+        try:
+            return _render(finding, outcome.value)
+        except Exception as exc:  # a plugin's template or figures may fail in any way; contain it
+            return _failed(finding, f"its section could not be rendered: {one_line(exc)}")
+    return DetectorSection(finding, finding.name)

@@ -1,0 +1,316 @@
+"""Render the evidence report: HTML from the Jinja2 templates, PDF from that HTML.
+
+Both outputs come from the same templates: ``report.html`` for the screen
+(self-contained, no JavaScript, a strict Content-Security-Policy) and
+``report.pdf`` by WeasyPrint with the print rules of the same stylesheet.
+Every value taken from the evidence reaches the templates as plain data and
+is escaped by autoescape; nothing from the evidence is marked safe.
+"""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import json
+import logging
+import shlex
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from importlib.resources import as_file, files
+from pathlib import Path
+from typing import Any
+
+from jinja2 import Environment, FunctionLoader, StrictUndefined
+from markupsafe import Markup
+
+from ..evidence import Evidence
+from ..findings import ExifSummary, Findings
+from ..plugins import PluginHost
+from . import images, wording
+from .plugin_sections import DetectorSection, section_for
+
+TEMPLATES_PACKAGE = "forensics_core.templates"
+PAPER_SIZES = {"a4": "A4", "letter": "letter"}
+NOT_GIVEN = "not given"
+_DETAILS_LIMIT = 3000
+
+# The libraries that make the report itself (the analysis libraries are in the findings).
+_REPORT_PACKAGES = ("jinja2", "weasyprint", "pydyf", "pyhanko", "cryptography")
+
+_ORIENTATIONS = {
+    1: "1 (normal)", 2: "2 (mirrored horizontally)", 3: "3 (rotated 180°)", 4: "4 (mirrored vertically)",
+    5: "5 (mirrored, rotated 90° counter-clockwise)", 6: "6 (rotated 90° clockwise for display)",
+    7: "7 (mirrored, rotated 90° clockwise)", 8: "8 (rotated 90° counter-clockwise for display)",
+}
+
+
+@dataclass(frozen=True)
+class SignatureInfo:
+    """What the signature block says about who signs and with which certificate."""
+
+    examiner: str
+    organisation: str
+    subject: str
+    fingerprint: str
+    self_signed: bool
+    valid_from: str
+    valid_to: str
+
+
+@dataclass(frozen=True)
+class ReportOptions:
+    """Choices for one report.
+
+    Parameters
+    ----------
+    exhibit_id : str or None
+        The exhibit number the evidence carries in the case.
+    paper : {"a4", "letter"}
+    report_date : str or None
+        ISO date-time (UTC) printed as the report's date; default now.
+    """
+
+    exhibit_id: str | None = None
+    paper: str = "a4"
+    report_date: str | None = None
+
+
+@dataclass
+class RenderedReport:
+    """The report's HTML, its detector sections (with the figure files to write) and what the PDF renderer refused."""
+
+    html: str
+    sections: list[DetectorSection]
+    refused_urls: list[str] = field(default_factory=list)
+
+
+def template_text(name: str) -> str:
+    """The text of one template or asset shipped in ``forensics_core.templates``."""
+    return files(TEMPLATES_PACKAGE).joinpath(name).read_text(encoding="utf-8")
+
+
+def _report_packages() -> dict[str, str | None]:
+    from importlib.metadata import PackageNotFoundError, version
+
+    found: dict[str, str | None] = {}
+    for name in _REPORT_PACKAGES:
+        try:
+            found[name] = version(name)
+        except PackageNotFoundError:
+            found[name] = None
+    return found
+
+
+def _num(value: float | None) -> str:
+    """A number to three significant figures, or a dash when the detector gives none."""
+    return "—" if value is None else f"{value:.3g}"
+
+
+def _utc_text(value: str) -> str:
+    """``2024-05-01T10:00:00Z`` as ``2024-05-01 10:00:00 UTC``; other text unchanged."""
+    return value[:-1].replace("T", " ") + " UTC" if value.endswith("Z") and "T" in value else value
+
+
+def _pretty(value: Any) -> str:
+    return json.dumps(value, indent=2, ensure_ascii=False, sort_keys=True)
+
+
+def _nested(value: list) -> bool:
+    return any(isinstance(x, (list, dict)) for x in value)
+
+
+def _details(value: Any, limit: int = _DETAILS_LIMIT) -> str:
+    """A detector's details for a reader: JSON with flat lists on one line, cut at ``limit`` characters.
+
+    The findings keep everything; pages of coordinates help no reader.
+    """
+
+    def fmt(v: Any, depth: int) -> str:
+        pad = "  " * depth
+        if isinstance(v, dict) and v:
+            items = [f"{pad}  {json.dumps(k, ensure_ascii=False)}: {fmt(x, depth + 1)}" for k, x in v.items()]
+            return "{\n" + ",\n".join(items) + f"\n{pad}}}"
+        if isinstance(v, list) and any(isinstance(x, dict) or isinstance(x, list) and _nested(x) for x in v):
+            return "[\n" + ",\n".join(f"{pad}  {fmt(x, depth + 1)}" for x in v) + f"\n{pad}]"
+        return json.dumps(v, ensure_ascii=False)
+
+    text = fmt(value, 0)
+    if len(text) > limit:
+        text = text[:limit] + f"\n... ({len(text) - limit:,} more characters; all of them are in findings.json)"
+    return text
+
+
+def _compact(value: Any) -> str:
+    return json.dumps(value, ensure_ascii=False, sort_keys=True, separators=(", ", ": "))
+
+
+def _environment() -> Environment:
+    # The project's own templates: trusted, but autoescaped like everything else.
+    env = Environment(loader=FunctionLoader(template_text), autoescape=True, undefined=StrictUndefined,
+                      trim_blocks=True, lstrip_blocks=True)
+    env.filters.update(num=_num, pretty=_pretty, details=_details, compact=_compact, utc=_utc_text)
+    return env
+
+
+def _camera_rows(exif: ExifSummary) -> list[tuple[str, str]]:
+    rows: list[tuple[str, str | None]] = [
+        ("Make", exif.make),
+        ("Model", exif.model),
+        ("Lens", " ".join(v for v in (exif.lens_make, exif.lens_model) if v) or None),
+    ]
+    if exif.focal_length_mm is not None or exif.focal_length_35mm is not None:
+        focal = f"{exif.focal_length_mm:g} mm" if exif.focal_length_mm is not None else "not recorded"
+        if exif.focal_length_35mm:
+            focal += f" ({exif.focal_length_35mm:g} mm in 35 mm film)"
+        rows.append(("Focal length", focal))
+    rows += [("Date/time original", exif.datetime_original), ("Date/time (file)", exif.datetime),
+             ("Software", exif.software)]
+    if exif.exif_image_width and exif.exif_image_height:
+        rows.append(("EXIF image size", f"{exif.exif_image_width} × {exif.exif_image_height}"))
+    if exif.gps is not None:
+        parts = []
+        if exif.gps.latitude is not None and exif.gps.longitude is not None:
+            parts.append(f"{exif.gps.latitude:.6f}°, {exif.gps.longitude:.6f}° (WGS-84 as recorded)")
+        if exif.gps.altitude_m is not None:
+            parts.append(f"altitude {exif.gps.altitude_m:.1f} m")
+        rows.append(("GPS", "; ".join(parts) or "present but incomplete"))
+    return [(k, v) for k, v in rows if v]
+
+
+def command_line(findings: Findings) -> str:
+    """The ``forensics analyze`` command that reproduces the recorded findings (to OUT), one option per line."""
+    p = findings.parameters
+    options: list[tuple[str, str]] = [
+        ("--out", "OUT"), ("--format", "json"),
+        ("--detectors", ",".join(p.get("detectors") or [])),
+        ("--fusion", str(p.get("fusion"))), ("--timeout", f"{p.get('timeout_s'):g}"),
+        ("--max-pixels", str(p.get("max_pixels"))), ("--isolation", str(p.get("isolation"))),
+    ]
+    for flag, key in (("--case-id", "case_id"), ("--examiner", "examiner")):
+        if p.get(key):
+            options.append((flag, str(p[key])))
+    for det, params in sorted((p.get("detector_params") or {}).items()):
+        for key, value in sorted(params.items()):
+            options.append(("--param", f"{det}.{key}={json.dumps(value, separators=(',', ':'))}"))
+    lines = [f"forensics analyze {shlex.quote(findings.evidence.path)}"]
+    lines += [f"{flag} {shlex.quote(value)}" for flag, value in options]
+    return " \\\n    ".join(lines)
+
+
+def _summary(findings: Findings) -> dict[str, Any]:
+    verdict = findings.verdict
+    strength = wording.strength(verdict, findings.detectors)
+    rows = [
+        {"name": f.name, "version": f.version, "status": f.status.value, "status_words": wording.STATUS_WORDS[f.status],
+         "score": _num(f.score), "p_value": _num(f.p_value), "nfa": _num(f.nfa), "summary": f.summary, "error": f.error}
+        for f in findings.detectors
+    ]
+    reading = {
+        "consistent": "No detector found a trace of manipulation strong enough to reject the hypothesis that the photo is "
+                      "an original. This does not prove that it is one: the detectors look for specific traces only.",
+        "inconsistent": "At least one detector found a trace that is unlikely in an original photo at the stated level. "
+                        "It does not say who altered the photo, how, or why.",
+        "inconclusive": "The detectors could not test the photo (too little of their trace, or failures); nothing is "
+                        "said for or against an original.",
+    }[verdict.label.value]
+    return {
+        "label": verdict.label.value,
+        "outcome": wording.OUTCOME_WORDS[verdict.label],
+        "strength": strength,
+        "explanation": verdict.explanation,
+        "reading": reading,
+        "policy": verdict.policy,
+        "rows": rows,
+        "scale": wording.SCALE if strength.graded else (),
+    }
+
+
+def _stylesheet(paper: str) -> str:
+    if paper not in PAPER_SIZES:
+        raise ValueError(f"paper must be one of {', '.join(PAPER_SIZES)}")
+    return template_text("report.css") + f"\n@page {{ size: {PAPER_SIZES[paper]}; }}\n"
+
+
+def _csp(css: str) -> str:
+    """No scripts, no fetches, images only inline, and only this exact stylesheet."""
+    digest = base64.b64encode(hashlib.sha256(css.encode("utf-8")).digest()).decode("ascii")
+    return ("default-src 'none'; script-src 'none'; object-src 'none'; img-src data:; "
+            f"style-src 'sha256-{digest}'; font-src 'none'; connect-src 'none'; base-uri 'none'; form-action 'none'")
+
+
+def render_html(findings: Findings, evidence: Evidence, signature: SignatureInfo, options: ReportOptions,
+                host: PluginHost | None = None, sections: Sequence[DetectorSection] | None = None) -> RenderedReport:
+    """Render ``report.html``.
+
+    Parameters
+    ----------
+    findings, evidence
+        The run to report and the evidence it examined.
+    signature : SignatureInfo
+        Examiner and certificate for the signature block.
+    options : ReportOptions
+    host : PluginHost, optional
+        Plugins asked for their detector sections; without it every
+        detector gets the generic section.
+    sections : sequence of DetectorSection, optional
+        Already built sections (otherwise built here).
+    """
+    css = _stylesheet(options.paper)
+    built = list(sections) if sections is not None else [section_for(host, f, evidence) for f in findings.detectors]
+    thumbnail = images.embedded_thumbnail(evidence.data) if findings.evidence.exif.thumbnail_present else None
+    ev = findings.evidence
+    context = {
+        "csp": _csp(css),
+        "css": Markup(css),  # the project's own stylesheet, not evidence data
+        "tool": findings.tool,
+        "created": findings.created,
+        "schema_version": findings.schema_version,
+        "report_date": options.report_date or datetime.now(timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z"),
+        "case_id": findings.parameters.get("case_id") or NOT_GIVEN,
+        "exhibit_id": options.exhibit_id or NOT_GIVEN,
+        "evidence": ev,
+        "orientation": (_ORIENTATIONS.get(ev.orientation, str(ev.orientation)) + "; recorded, not applied"
+                        if ev.orientation is not None else "not recorded"),
+        "camera_rows": _camera_rows(ev.exif),
+        "photo_src": images.data_url(images.preview(evidence.pixels), "image/jpeg"),
+        "thumbnail_src": images.data_url(thumbnail, "image/jpeg") if thumbnail else None,
+        "thumbnail_note": ("The EXIF data names a thumbnail, but it could not be read."
+                           if ev.exif.thumbnail_present else "The file carries no embedded thumbnail."),
+        "summary": _summary(findings),
+        "sections": built,
+        "status_words": wording.STATUS_WORDS,
+        "parameters": findings.parameters,
+        "environment": findings.environment,
+        "report_packages": _report_packages(),
+        "plugins": findings.plugins,
+        "detectors": findings.detectors,
+        "command_line": command_line(findings),
+        "signature": signature,
+        "raw_tags": ev.exif.raw,
+        "extra_metadata": ev.extra_metadata,
+    }
+    html = _environment().get_template("report.html.j2").render(context)
+    return RenderedReport(html=html, sections=built)
+
+
+def render_pdf(report: RenderedReport) -> bytes:
+    """Lay out the report's HTML as a PDF (print media) with the safe fetcher.
+
+    Refused URLs are added to ``report.refused_urls``. WeasyPrint's own
+    messages are kept out of the user's terminal.
+    """
+    from .fetcher import SafeFetcher
+    from .weasy import weasyprint
+
+    with as_file(files(TEMPLATES_PACKAGE)) as assets:
+        fetcher = SafeFetcher(Path(assets))
+        logger = logging.getLogger("weasyprint")
+        previous = logger.propagate
+        logger.propagate = False
+        try:
+            pdf = weasyprint.HTML(string=report.html, url_fetcher=fetcher, media_type="print").write_pdf()
+        finally:
+            logger.propagate = previous
+    report.refused_urls.extend(fetcher.refused)
+    return pdf

@@ -1,0 +1,100 @@
+"""Plugins whose report sections behave well or badly on purpose, loaded through real entry points."""
+
+import io
+
+from PIL import Image
+
+from forensics_core import DetectorResult, DetectorSpec, Status, hookimpl
+from forensics_core.report import Figure, ReportSection
+
+HOSTILE = '<script>alert("x")</script>'
+
+SVG = (b'<svg xmlns="http://www.w3.org/2000/svg" width="120" height="40">'
+       b'<rect width="120" height="40" fill="#ccd"/><text x="6" y="25">k1 plot</text></svg>')
+
+
+def png(size=(64, 48), colour=(200, 40, 40)) -> bytes:
+    buf = io.BytesIO()
+    Image.new("RGB", size, colour).save(buf, "PNG")
+    return buf.getvalue()
+
+
+class _Detector:
+    name = "base"
+
+    @hookimpl
+    def forensics_register_detectors(self):
+        return [DetectorSpec(self.name, "2.0", f"Report fixture {self.name}.")]
+
+    @hookimpl
+    def forensics_analyze(self, detector, evidence, params):
+        return DetectorResult(Status.OK, f"{self.name} looked at the photo.", score=0.2, p_value=0.4,
+                              details={"lines": [[1, 2], [3, 4]], "note": HOSTILE})
+
+
+class Sectioned(_Detector):
+    """The generic path: title, escaped context, a placed PNG, an unplaced SVG."""
+
+    name = "sectioned"
+
+    @hookimpl
+    def forensics_report_section(self, finding, evidence):
+        template = ("<p class='fixture-intro'>Lines found: {{ n_lines }}; label {{ label }}.</p>"
+                    "<table><tr><th>k1</th><td>{{ '%.3f' | format(k1) }} ± {{ '%.3f' | format(k1_stderr) }}</td></tr></table>"
+                    "{{ figures.overlay }}")
+        return ReportSection(
+            title="Sectioned fixture detector",
+            template=template,
+            context={"n_lines": 7, "label": HOSTILE, "k1": -0.0491, "k1_stderr": 0.0083},
+            figures={"overlay": Figure(png(), "image/png", "Lines drawn on the photo <b>numbered</b>"),
+                     "plot": Figure(SVG, "image/svg+xml", "k1 against distance")},
+        )
+
+
+class SectionRaising(_Detector):
+    name = "section_raising"
+
+    @hookimpl
+    def forensics_report_section(self, finding, evidence):
+        raise RuntimeError("the section hook broke")
+
+
+class SectionWrongType(_Detector):
+    name = "section_wrong_type"
+
+    @hookimpl
+    def forensics_report_section(self, finding, evidence):
+        return {"title": "not a ReportSection"}
+
+
+class SectionEscapes(_Detector):
+    """A template that tries to leave the sandbox."""
+
+    name = "section_escapes"
+
+    @hookimpl
+    def forensics_report_section(self, finding, evidence):
+        return ReportSection("Escaping", "{{ ''.__class__.__mro__[1].__subclasses__() }}")
+
+
+class SectionFetches(_Detector):
+    """Plugin markup (not evidence) that names local files: the PDF renderer must load none of them."""
+
+    name = "section_fetches"
+
+    @hookimpl
+    def forensics_report_section(self, finding, evidence):
+        template = ('<img src="file:///etc/passwd" alt="passwd">'
+                    '<link rel="attachment" href="file:///etc/hostname">'
+                    '<a rel="attachment" href="file:///etc/hostname">hostname</a>'
+                    '<img src="http://127.0.0.1:9/x.png" alt="web">'
+                    "<p>fetching fixture rendered</p>")
+        return ReportSection("Fetching", template)
+
+
+class NoSection(_Detector):
+    name = "no_section"
+
+
+sectioned, section_raising, section_wrong_type = Sectioned(), SectionRaising(), SectionWrongType()
+section_escapes, section_fetches, no_section = SectionEscapes(), SectionFetches(), NoSection()

@@ -1,0 +1,222 @@
+"""Signatures and verification with real keys, real PDFs and the standard tools (pdfsig, openssl).
+
+What pdfsig is asked: poppler checks the signature with NSS and has no trust
+store holding our self-signed test certificate, so the tests require
+"Signature is Valid." and "Total document signed" and accept that the
+certificate is reported untrusted/unknown ("signature is valid, certificate
+not trusted"). Trust is tested with pyHanko and openssl, which are given the
+certificate explicitly.
+"""
+
+import json
+import shutil
+import subprocess
+from io import BytesIO
+from pathlib import Path
+
+import pytest
+from cryptography.hazmat.primitives.asymmetric import ed25519
+from cryptography.hazmat.primitives.serialization import NoEncryption, pkcs12
+
+from forensics_core import signing
+from forensics_core.manifest import MANIFEST_NAME, SIGNATURE_NAME
+from forensics_core.verify import verify_bundle
+from report_helpers import make_bundle, pdf_pages_text, run
+
+KINDS = ["findings.json", "report.html", "report.pdf", "sectioned-overlay.png", "sectioned-plot.svg", "signer.pem",
+         MANIFEST_NAME, SIGNATURE_NAME]
+
+
+def flip_byte(path: Path, where: float = 0.5) -> None:
+    data = bytearray(path.read_bytes())
+    data[int(len(data) * where)] ^= 0x01
+    path.write_bytes(bytes(data))
+
+
+def failures(result) -> list[str]:
+    return [str(p) for p in result.problems]
+
+
+def test_untouched_bundle_verifies_with_and_without_trust(bundle, data_dir, key_files):
+    out = run("verify", bundle, "--evidence", data_dir / "exif" / "Canon_40D.jpg", "--trust", key_files[1])
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip().endswith(f"verified: {bundle}")
+    assert "report.pdf: certification signature valid, covers the entire file" in out.stdout
+    assert out.stderr == ""
+    plain = run("verify", bundle)
+    assert plain.returncode == 0, plain.stderr
+    assert "signer identity not checked" in plain.stdout and "self-signed" in plain.stdout
+
+
+def test_manifest_lists_every_file_and_the_evidence(bundle, data_dir):
+    manifest = json.loads((bundle / MANIFEST_NAME).read_text())
+    listed = {f["name"] for f in manifest["files"]}
+    on_disk = {p.name for p in bundle.iterdir()} - {MANIFEST_NAME, SIGNATURE_NAME}
+    assert listed == on_disk
+    assert {"findings.json", "report.html", "report.pdf", "signer.pem", "sectioned-overlay.png"} <= listed
+    from forensics_core.evidence import load_evidence
+
+    info = load_evidence(data_dir / "exif" / "Canon_40D.jpg").info
+    assert manifest["evidence"]["sha256"] == info.sha256 and manifest["evidence"]["sha512"] == info.sha512
+
+
+@pytest.mark.parametrize("name", KINDS)
+def test_one_flipped_byte_in_any_file_fails_and_is_named(bundle_copy, name):
+    flip_byte(bundle_copy / name)
+    out = run("verify", bundle_copy)
+    assert out.returncode == 1
+    lines = out.stderr.strip().splitlines()
+    assert lines and all(line.startswith("forensics: error: ") for line in lines)
+    assert any(line.startswith(f"forensics: error: {name}: ") for line in lines), out.stderr
+    assert "Traceback" not in out.stderr
+
+
+def test_flipped_evidence_fails_and_is_named(bundle, data_dir, tmp_path):
+    photo = tmp_path / "Canon_40D.jpg"
+    shutil.copyfile(data_dir / "exif" / "Canon_40D.jpg", photo)
+    flip_byte(photo, 0.9)
+    out = run("verify", bundle, "--evidence", photo)
+    assert out.returncode == 1
+    assert out.stderr.strip() == ("forensics: error: evidence: Canon_40D.jpg does not match the SHA-256/SHA-512 "
+                                  "recorded for Canon_40D.jpg")
+
+
+def test_bytes_appended_to_the_pdf_fail(bundle_copy):
+    with (bundle_copy / "report.pdf").open("ab") as fh:
+        fh.write(b"\n% appended after %%EOF\n")
+    result = verify_bundle(bundle_copy)
+    assert "report.pdf: PDF signature does not cover the entire file (coverage ENTIRE_REVISION; bytes were added " \
+           "after signing)" in failures(result)
+    assert "report.pdf: SHA-256 does not match the manifest (altered)" in failures(result)
+
+
+def test_an_extra_or_missing_file_fails(bundle_copy):
+    (bundle_copy / "notes.txt").write_text("added later")
+    (bundle_copy / "report.html").unlink()
+    got = failures(verify_bundle(bundle_copy))
+    assert "notes.txt: not listed in the manifest" in got and "report.html: missing" in got
+
+
+def test_another_trust_anchor_fails(bundle, tmp_path):
+    p12, cert = signing.create_self_signed("Someone Else", "Elsewhere")
+    _, pem = signing.write_key_files(tmp_path, p12, cert)
+    got = failures(verify_bundle(bundle, trust=pem))
+    assert "manifest.json.p7s: signer certificate is not trusted by --trust" in got
+    assert "report.pdf: PDF signer certificate is not trusted by --trust" in got
+
+
+def test_pdf_is_a_pades_certification_with_no_changes_permitted(bundle, key):
+    from pyhanko.pdf_utils.reader import PdfFileReader
+    from pyhanko.sign.fields import MDPPerm
+    from pyhanko.sign.validation.pdf_embedded import read_certification_data
+
+    reader = PdfFileReader(BytesIO((bundle / "report.pdf").read_bytes()))
+    assert read_certification_data(reader).permission is MDPPerm.NO_CHANGES
+    (sig,) = reader.embedded_signatures
+    assert sig.sig_object["/SubFilter"] == "/ETSI.CAdES.detached"
+    assert sig.signer_cert.sha256_fingerprint.replace(" ", "").upper() == key.fingerprint.replace(":", "")
+
+
+def test_pdfsig_reports_the_signature_valid_and_total(bundle, tmp_path):
+    out = subprocess.run(["pdfsig", str(bundle / "report.pdf")], capture_output=True, text=True)
+    assert "Signature Validation: Signature is Valid." in out.stdout, out.stdout
+    assert "Total document signed" in out.stdout and "Not total document signed" not in out.stdout
+    assert "Signer Certificate Common Name: Dr. Ada Examiner" in out.stdout
+    appended = tmp_path / "appended.pdf"
+    appended.write_bytes((bundle / "report.pdf").read_bytes() + b"\nextra")
+    assert "Not total document signed" in subprocess.run(["pdfsig", str(appended)], capture_output=True,
+                                                         text=True).stdout
+
+
+def test_openssl_verifies_the_manifest_signature(bundle_copy, key_files):
+    cmd = ["openssl", "cms", "-verify", "-binary", "-inform", "DER", "-in", str(bundle_copy / SIGNATURE_NAME),
+           "-content", str(bundle_copy / MANIFEST_NAME), "-CAfile", str(key_files[1]), "-out", "/dev/null"]
+    ok = subprocess.run(cmd, capture_output=True, text=True)
+    assert ok.returncode == 0 and "Verification successful" in ok.stderr, ok.stderr
+    flip_byte(bundle_copy / MANIFEST_NAME)
+    bad = subprocess.run(cmd, capture_output=True, text=True)
+    assert bad.returncode != 0 and "Verification failure" in bad.stderr
+
+
+def test_keys_create_makes_a_usable_protected_key(tmp_path, data_dir):
+    env = {"FORENSICS_KEY_PASSWORD": "correct horse"}
+    out = run("keys", "create", "--name", "Dr. Ada Examiner", "--org", "Lab", "--out", tmp_path / "k", env=env)
+    assert out.returncode == 0, out.stderr
+    p12, pem = tmp_path / "k" / "examiner.p12", tmp_path / "k" / "examiner.pem"
+    assert p12.stat().st_mode & 0o077 == 0
+    assert "SHA-256:" in out.stdout and "self-signed" in out.stdout
+    with pytest.raises(signing.SigningError, match="wrong password"):
+        signing.load_key(p12, b"wrong")
+    again = run("keys", "create", "--name", "X", "--org", "Y", "--out", tmp_path / "k", env=env)
+    assert again.returncode == 1 and "refusing to overwrite" in again.stderr
+
+    analysed = run("analyze", data_dir / "exif" / "Canon_40D.jpg", "--out", tmp_path / "out", "--detectors", "",
+                   "--key", p12, "--exhibit-id", "E-2", "--paper", "letter", env=env)
+    assert analysed.returncode == 0, analysed.stderr
+    folder = tmp_path / "out" / "Canon_40D"
+    assert run("verify", folder, "--trust", pem).returncode == 0
+    wrong = run("analyze", data_dir / "exif" / "Canon_40D.jpg", "--out", tmp_path / "out2", "--key", p12,
+                env={"FORENSICS_KEY_PASSWORD": "nope"})
+    assert wrong.returncode == 2 and "wrong password" in wrong.stderr and "Traceback" not in wrong.stderr
+
+
+def test_rsa_3072_keys_sign_too(tmp_path, data_dir):
+    p12, cert = signing.create_self_signed("RSA Examiner", "Lab", key_type="rsa-3072")
+    p12_path, pem = signing.write_key_files(tmp_path / "k", p12, cert)
+    assert cert.public_key().key_size == 3072
+    folder = make_bundle(data_dir / "exif" / "Canon_40D.jpg", tmp_path / "b", signing.load_key(p12_path, None))
+    assert verify_bundle(folder, trust=pem).ok
+    out = subprocess.run(["pdfsig", str(folder / "report.pdf")], capture_output=True, text=True)
+    assert "Signature is Valid." in out.stdout
+
+
+def test_ed25519_keys_are_refused(tmp_path):
+    from datetime import datetime, timedelta, timezone
+
+    from cryptography import x509
+    from cryptography.x509.oid import NameOID
+
+    key = ed25519.Ed25519PrivateKey.generate()
+    name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "ed")])
+    now = datetime.now(timezone.utc)
+    cert = (x509.CertificateBuilder().subject_name(name).issuer_name(name).public_key(key.public_key())
+            .serial_number(1).not_valid_before(now).not_valid_after(now + timedelta(days=1)).sign(key, None))
+    path = tmp_path / "ed.p12"
+    path.write_bytes(pkcs12.serialize_key_and_certificates(b"ed", key, cert, None, NoEncryption()))
+    with pytest.raises(signing.SigningError, match="poppler rejects Ed25519"):
+        signing.load_key(path, None)
+
+
+def test_per_user_key_is_made_on_first_use_and_reused(tmp_path, data_dir, isolated_home):
+    photo = data_dir / "exif" / "Canon_40D.jpg"
+    first = run("analyze", photo, "--out", tmp_path / "a", "--detectors", "", "--examiner", "Dr. B")
+    assert first.returncode == 0, first.stderr
+    assert "made a self-signed examiner key for trial use" in first.stdout
+    assert (isolated_home / "examiner.p12").is_file() and (isolated_home / "examiner.pem").is_file()
+    second = run("analyze", photo, "--out", tmp_path / "b", "--detectors", "")
+    assert second.returncode == 0 and "made a self-signed" not in second.stdout
+    fp = [json.loads((tmp_path / d / "Canon_40D" / MANIFEST_NAME).read_text())["signer"]["sha256_fingerprint"]
+          for d in ("a", "b")]
+    assert fp[0] == fp[1]
+    text = " ".join(" ".join(pdf_pages_text(tmp_path / "a" / "Canon_40D" / "report.pdf")).split())
+    assert "This certificate is self-signed" in text and "CN=Dr. B" in text
+
+
+def test_xdg_config_home_is_honoured(tmp_path, data_dir, monkeypatch):
+    monkeypatch.delenv("FORENSICS_HOME")
+    xdg = tmp_path / "xdg"
+    out = run("analyze", data_dir / "exif" / "Canon_40D.jpg", "--out", tmp_path / "o", "--detectors", "",
+              "--format", "html", env={"XDG_CONFIG_HOME": str(xdg)})
+    assert out.returncode == 0, out.stderr
+    assert (xdg / "forensics" / "examiner.p12").is_file()
+    folder = tmp_path / "o" / "Canon_40D"
+    assert not (folder / "report.pdf").exists() and (folder / "report.html").exists()
+    assert verify_bundle(folder).ok
+
+
+def test_json_only_needs_no_key(tmp_path, data_dir, isolated_home):
+    out = run("analyze", data_dir / "exif" / "Canon_40D.jpg", "--out", tmp_path / "o", "--format", "json",
+              "--detectors", "")
+    assert out.returncode == 0
+    assert sorted(p.name for p in (tmp_path / "o" / "Canon_40D").iterdir()) == ["findings.json"]
+    assert not isolated_home.exists()
