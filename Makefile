@@ -5,7 +5,7 @@ PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
-SAMPLE ?= tests/data/exif/87_OSError.jpg
+SAMPLES ?= tests/data/calibration/left01.jpg tests/data/exif/87_OSError.jpg
 OUT    ?= out
 
 # WeasyPrint needs Pango (and HarfBuzz' subsetter, and a font); the tests use
@@ -15,9 +15,10 @@ SYSTEM_PACKAGES := libpango-1.0-0 libpangoft2-1.0-0 libharfbuzz-subset0 fonts-de
 .PHONY: demo test bench check-python system-packages clean
 
 demo: $(STAMP)
-	$(PY) -m forensics_core analyze $(SAMPLE) --out $(OUT) --case-id DEMO-1 --exhibit-id 1
-	$(PY) -m forensics_core verify $(OUT)/$(basename $(notdir $(SAMPLE))) --evidence $(SAMPLE)
-	@echo "outputs: $(OUT)/$(basename $(notdir $(SAMPLE)))/ (findings.json, report.html, report.pdf, manifest.json, manifest.json.p7s)"
+	$(PY) -m forensics_core analyze $(SAMPLES) --out $(OUT) --case-id DEMO-1 --exhibit-id 1
+	@for photo in $(SAMPLES); do \
+	  $(PY) -m forensics_core verify $(OUT)/$$(basename $${photo%.*}) --evidence $$photo || exit 1; done
+	@echo "outputs: $(foreach p,$(SAMPLES),$(OUT)/$(basename $(notdir $(p)))/) (findings.json, report.html, report.pdf, manifest.json, manifest.json.p7s)"
 
 test: $(STAMP)
 	$(PY) -m pytest
