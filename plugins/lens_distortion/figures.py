@@ -11,7 +11,7 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-from PIL import Image, ImageDraw
+from PIL import Image, ImageDraw, ImageFont
 
 OVERLAY_MAX_SIDE = 1600
 
@@ -35,16 +35,23 @@ def line_class(line: Mapping[str, Any]) -> str:
     return "strong" if abs(z) >= 2.0 else "consistent"
 
 
-def _grey_rgb(pixels: np.ndarray) -> Image.Image:
-    """The stored grid as a dimmed RGB image, so coloured lines stand out."""
+def _display_image(pixels: np.ndarray, max_side: int) -> tuple[Image.Image, float]:
+    """The stored grid reduced to at most ``max_side`` and dimmed, as RGB, with its scale factor.
+
+    Reducing comes first (Pillow's ``reducing_gap`` bins before resampling),
+    so the cost does not grow with the photo's full resolution; dimming is a
+    lookup table on the small image so the coloured lines stand out.
+    """
     arr = np.asarray(pixels)
     if arr.dtype != np.uint8:
         arr = (arr.astype(np.float64) / max(float(arr.max()), 1.0) * 255.0).astype(np.uint8)
     if arr.ndim == 3:
-        arr = arr[..., :3] if arr.shape[2] >= 3 else np.repeat(arr[..., :1], 3, axis=2)
-    else:
-        arr = np.repeat(arr[..., None], 3, axis=2)
-    return Image.fromarray((arr * 0.6 + 40).astype(np.uint8))
+        arr = arr[..., :3] if arr.shape[2] >= 3 else arr[..., 0]
+    img = Image.fromarray(arr)
+    full = max(img.size)
+    img.thumbnail((max_side, max_side), Image.Resampling.LANCZOS, reducing_gap=2.0)
+    dimmed = img.convert("RGB").point([round(v * 0.6 + 40) for v in range(256)] * 3)
+    return dimmed, max(img.size) / full
 
 
 def overlay_png(pixels: np.ndarray, details: Mapping[str, Any]) -> bytes:
@@ -62,23 +69,21 @@ def overlay_png(pixels: np.ndarray, details: Mapping[str, Any]) -> bytes:
     bytes
         PNG, longest side at most :data:`OVERLAY_MAX_SIDE` pixels.
     """
-    img = _grey_rgb(pixels)
-    factor = min(1.0, OVERLAY_MAX_SIDE / max(img.size))
-    if factor < 1.0:
-        img = img.resize((round(img.width * factor), round(img.height * factor)), Image.Resampling.LANCZOS)
+    img, factor = _display_image(pixels, OVERLAY_MAX_SIDE)
     draw = ImageDraw.Draw(img)
     width = max(2, round(max(img.size) / 400))
+    font = ImageFont.load_default(size=max(12, round(max(img.size) / 55)))
     for line in details.get("lines", []):
         pts = np.asarray(line["points_px"], dtype=np.float64) * factor
         colour = COLOURS[line_class(line)]
         draw.line([tuple(p) for p in pts], fill=colour, width=width)
         x, y = pts[len(pts) // 2]
         label = str(line["id"])
-        box = draw.textbbox((x, y), label)
+        box = draw.textbbox((x, y), label, font=font)
         draw.rectangle((box[0] - 2, box[1] - 1, box[2] + 2, box[3] + 1), fill=(255, 255, 255))
-        draw.text((x, y), label, fill=colour)
+        draw.text((x, y), label, fill=colour, font=font)
     out = io.BytesIO()
-    img.save(out, format="PNG", optimize=True)
+    img.save(out, format="PNG")
     return out.getvalue()
 
 
