@@ -43,7 +43,7 @@ from scipy.optimize import least_squares
 from scipy.stats import chi2, norm
 
 from .geometry import norm_scale, to_normalised
-from .k1 import LineK1, fit_lines
+from .k1 import LineK1, fit_lines, fit_lines_multistart
 
 __all__ = [
     "ConsistencyResult",
@@ -248,6 +248,10 @@ class ConsistencyResult:
     reason : str or None
         Why the result is inconclusive.
     alpha : float
+    line_fits : tuple of LineK1
+        Each input line's joint fit under the paper's model (centre at the
+        image centre, no ``k2``), in input order; NaN ``k1`` for lines too
+        short to fit.
     """
 
     verdict: str
@@ -262,6 +266,7 @@ class ConsistencyResult:
     informative: bool
     reason: str | None
     alpha: float
+    line_fits: tuple[LineK1, ...]
 
 
 def _weighted_median(values: np.ndarray, weights: np.ndarray) -> float:
@@ -516,7 +521,8 @@ def _inconclusive(
         for j, f in enumerate(fits)
     )
     test = "no test: " + reason
-    return ConsistencyResult("inconclusive", None, departures, (), np.nan, test, "none", (), rules, False, reason, alpha)
+    return ConsistencyResult("inconclusive", None, departures, (), np.nan, test, "none", (), rules, False, reason, alpha,
+                             tuple(fits))
 
 
 def assess(
@@ -607,7 +613,7 @@ def assess(
 
 def _paper_model_fits(norm_lines: list[np.ndarray], usable: list[int], scale: float) -> list[LineK1]:
     """Joint per-line fits under the paper's model (centre fixed, no k2); short lines get inf stderr."""
-    fitted = dict(zip(usable, fit_lines([norm_lines[j] for j in usable], scale))) if usable else {}
+    fitted = dict(zip(usable, fit_lines_multistart([norm_lines[j] for j in usable], scale))) if usable else {}
     return [
         fitted.get(j) or LineK1(np.nan, np.inf, np.inf, np.nan, len(p), 0.0, np.nan, np.nan, np.nan, 0.0)
         for j, p in enumerate(norm_lines)
@@ -703,7 +709,7 @@ def _decide(
     )
     verdict = "inconsistent" if image_p < alpha else "consistent"
     return ConsistencyResult(verdict, model, departures, group_results, image_p, test, evidence,
-                             tuple(sorted(flagged)), rules, True, None, alpha)
+                             tuple(sorted(flagged)), rules, True, None, alpha, tuple(paper_fits))
 
 
 def _criteria(line_p: np.ndarray, group_p: np.ndarray, homogeneous: np.ndarray, single_lines: bool) -> dict[str, float]:

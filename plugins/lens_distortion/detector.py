@@ -19,7 +19,7 @@ from forensics_core import DetectorResult, DetectorSpec, Status
 from .consistency import ConsistencyResult, assess
 from .edges import subpixel_edges
 from .geometry import norm_scale, to_normalised
-from .k1 import k1_joint, k1_paper, signed_distance, trim_to_shortest
+from .k1 import k1_paper, signed_distance, trim_to_shortest
 from .lines import DistortedLine, extract_lines
 
 NAME = "lens_distortion"
@@ -81,12 +81,11 @@ def _none_if_nan(x: float) -> float | None:
 
 def _line_records(lines: list[DistortedLine], shape: tuple[int, int], result: ConsistencyResult,
                   params: Mapping[str, Any]) -> list[dict[str, Any]]:
-    scale = norm_scale(shape)
     norm = [to_normalised(line.points, shape) for line in lines]
     paper_input = trim_to_shortest(norm) if params["paper_trim"] else norm
     records = []
     for i, (line, pts) in enumerate(zip(lines, norm)):
-        joint = k1_joint(pts, scale)
+        joint = result.line_fits[i]
         dep = result.departures[i]
         records.append({
             "id": i + 1,

@@ -447,9 +447,23 @@ def k1_joint(
 
     Notes
     -----
-    The fit starts from several values of ``k1`` and keeps the one with the
-    smallest residual: on a line that fits the model poorly (a curved object)
-    the cost can have several minima, and a start at ``k1 = 0`` can stall.
+    Starts from several values of ``k1`` (:func:`fit_lines_multistart`).
     """
-    fits = [fit_lines([points_norm], scale_px, k2=k2, centre=centre, k1_start=start)[0] for start in _K1_STARTS]
-    return min(fits, key=lambda f: (not np.isfinite(f.residual_rms_px), f.residual_rms_px))
+    return fit_lines_multistart([points_norm], scale_px, k2=k2, centre=centre)[0]
+
+
+def fit_lines_multistart(
+    lines_norm: Sequence[np.ndarray],
+    scale_px: float,
+    *,
+    k2: float = 0.0,
+    centre: Sequence[float] = (0.0, 0.0),
+) -> list[LineK1]:
+    """:func:`fit_lines` from each of several starting ``k1``, keeping each line's best fit.
+
+    On a line that fits the model poorly (a curved object) the cost can have
+    several minima, and a start at ``k1 = 0`` can stall; without a good start
+    from elsewhere (a global model), try several.
+    """
+    runs = [fit_lines(lines_norm, scale_px, k2=k2, centre=centre, k1_start=start) for start in _K1_STARTS]
+    return [min(fits, key=lambda f: (not np.isfinite(f.residual_rms_px), f.residual_rms_px)) for fits in zip(*runs)]
