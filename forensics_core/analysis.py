@@ -177,8 +177,19 @@ def _run_threaded(call: Callable[[], Any], timeout_s: float) -> tuple:
     return box[0]
 
 
-def run_detector(host: PluginHost, name: str, evidence: Evidence, params: dict[str, Any], options: Options) -> DetectorFinding:
-    """Run one detector with containment; always returns a finding."""
+def run_detector(
+    host: PluginHost,
+    name: str,
+    evidence: Evidence,
+    params: dict[str, Any],
+    options: Options,
+    prior: Mapping[str, DetectorFinding] | None = None,
+) -> DetectorFinding:
+    """Run one detector with containment; always returns a finding.
+
+    ``prior`` holds findings of this run; the detector sees those its spec
+    ``uses``.
+    """
     registered = host.detectors.get(name)
     if registered is None:
         available = ", ".join(sorted(host.detectors)) or "none"
@@ -190,8 +201,10 @@ def run_detector(host: PluginHost, name: str, evidence: Evidence, params: dict[s
     spec, plugin = registered.spec, registered.plugin
     analyze_impl = host.implementation("forensics_analyze", plugin)
 
+    seen = {n: f for n, f in (prior or {}).items() if n in spec.uses}
+
     def call() -> Any:
-        return analyze_impl(detector=name, evidence=evidence, params=dict(params))
+        return analyze_impl(detector=name, evidence=evidence, params=dict(params), prior=seen)
 
     started = time.perf_counter()
     if analyze_impl is None:
@@ -240,6 +253,30 @@ def fuse(host: PluginHost, policy: str, findings: Sequence[DetectorFinding], evi
     return Verdict(VerdictLabel.INCONCLUSIVE, None, f"No installed plugin implements fusion policy {policy!r}.", policy)
 
 
+def run_order(host: PluginHost, selected: Sequence[str]) -> list[str]:
+    """``selected`` reordered so that each detector runs after those it ``uses``.
+
+    Otherwise the given order is kept; a cycle of ``uses`` is broken by that order.
+    """
+    chosen = set(selected)
+    order: list[str] = []
+    visiting: set[str] = set()
+
+    def visit(name: str) -> None:
+        if name in order or name in visiting:
+            return
+        visiting.add(name)
+        registered = host.detectors.get(name)
+        for dep in registered.spec.uses if registered else ():
+            if dep in chosen:
+                visit(dep)
+        order.append(name)
+
+    for name in selected:
+        visit(name)
+    return order
+
+
 def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> Findings:
     """Run the selected detectors on already loaded evidence."""
     if options.isolation not in ISOLATIONS:
@@ -247,7 +284,10 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
     params = resolve_params(host, options)
     selected = list(options.detectors) if options.detectors is not None else sorted(host.detectors)
     evidence.info.extra_metadata = _extra_metadata(host, evidence)
-    findings = [run_detector(host, name, evidence, params.get(name, {}), options) for name in selected]
+    done: dict[str, DetectorFinding] = {}
+    for name in run_order(host, selected):
+        done[name] = run_detector(host, name, evidence, params.get(name, {}), options, prior=done)
+    findings = [done[name] for name in selected]
     return Findings(
         schema_version=SCHEMA_VERSION,
         tool=Tool("forensics", __version__),
@@ -321,4 +361,4 @@ def analyze(
     return analyze_evidence(evidence, host, options)
 
 
-__all__ = ["Options", "analyze", "analyze_evidence", "fuse", "resolve_params", "run_detector"]
+__all__ = ["Options", "analyze", "analyze_evidence", "fuse", "resolve_params", "run_detector", "run_order"]

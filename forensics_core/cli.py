@@ -267,7 +267,8 @@ def plugins_command(ctx, as_json):
             "plugins": [asdict(r) for r in records],
             "detectors": [
                 {"name": n, "plugin": d.plugin, "version": d.spec.version, "description": d.spec.description,
-                 "references": list(d.spec.references), "default_params": dict(d.spec.default_params)}
+                 "references": list(d.spec.references), "default_params": dict(d.spec.default_params),
+                 "uses": list(d.spec.uses)}
                 for n, d in sorted(host.detectors.items())
             ],
         }

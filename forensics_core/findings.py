@@ -62,6 +62,11 @@ class DetectorSpec:
     default_params : mapping
         JSON-serialisable parameters and their defaults; a user may override
         any of them, and the merged set is recorded with the finding.
+    uses : tuple of str
+        Other detectors whose findings this one reads (``prior`` in
+        ``forensics_analyze``). When both are selected, those run first; when
+        one is absent or fails, this detector still runs and must say what
+        it could not compare.
     """
 
     name: str
@@ -69,6 +74,7 @@ class DetectorSpec:
     description: str
     references: tuple[str, ...] = ()
     default_params: Mapping[str, Any] = field(default_factory=dict)
+    uses: tuple[str, ...] = ()
 
 
 @dataclass

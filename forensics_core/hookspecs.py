@@ -47,7 +47,9 @@ def forensics_register_detectors() -> Sequence[DetectorSpec]:
 
 
 @hookspec
-def forensics_analyze(detector: str, evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult | None:
+def forensics_analyze(
+    detector: str, evidence: Evidence, params: Mapping[str, Any], prior: Mapping[str, DetectorFinding]
+) -> DetectorResult | None:
     """Analyse one photo with one of this plugin's detectors.
 
     Called once per photo for each selected detector, only on the plugin that
@@ -55,7 +57,9 @@ def forensics_analyze(detector: str, evidence: Evidence, params: Mapping[str, An
     (``evidence.pixels``, read-only; ``evidence.luma`` as float in [0, 1]),
     the original bytes (``evidence.data``) and the recorded properties and
     EXIF (``evidence.info``). ``params`` holds the detector's default
-    parameters merged with the user's overrides.
+    parameters merged with the user's overrides. ``prior`` maps the names in
+    the spec's ``uses`` to their findings in this run, for those that ran
+    (declare the argument only if you need it; it is empty otherwise).
 
     Return a :class:`forensics_core.DetectorResult`: ``status`` (``ok``,
     ``inconclusive`` with the reason in the summary, or ``skipped``), a

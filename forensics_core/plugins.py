@@ -151,6 +151,8 @@ class PluginHost:
                 raise ValueError(f"detector {spec.name!r} is already provided by plugin {self.detectors[spec.name].plugin!r}")
             if not isinstance(spec.version, str) or not spec.version:
                 raise ValueError(f"detector {spec.name!r} has no version")
+            if isinstance(spec.uses, str) or not all(isinstance(u, str) for u in spec.uses):
+                raise ValueError(f"detector {spec.name!r}: uses must be a tuple of detector names")
         return list(value)
 
     def _fail(self, plugin: object, record: PluginRecord, reason: str) -> PluginRecord:

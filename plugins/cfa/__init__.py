@@ -1,0 +1,1 @@
+"""Colour-filter-array demosaicing detector (entry point ``cfa``)."""

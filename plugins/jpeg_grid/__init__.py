@@ -1,0 +1,1 @@
+"""JPEG block-grid detector (entry point ``jpeg_grid``)."""

@@ -1,0 +1,1 @@
+"""Metadata checks detector (entry point ``metadata``)."""
