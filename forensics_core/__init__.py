@@ -18,6 +18,7 @@ from .findings import (
     VerdictLabel,
 )
 from .hookspecs import PROJECT
+from .synthetic import SyntheticCase
 
 try:
     __version__ = version("forensics")
@@ -41,6 +42,7 @@ __all__ = [
     "EvidenceError",
     "Findings",
     "Status",
+    "SyntheticCase",
     "Verdict",
     "VerdictLabel",
     "__version__",

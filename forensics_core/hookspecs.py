@@ -17,7 +17,7 @@ takes the others down.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import pluggy
@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     from .evidence import Evidence
     from .findings import DetectorFinding, DetectorResult, DetectorSpec, Verdict
     from .report.sections import ReportSection
+    from .synthetic import SyntheticCase
 
 PROJECT = "forensics"
 
@@ -115,4 +116,19 @@ def forensics_register_commands(cli: click.Group) -> None:
 
     Use ``@cli.command()`` on your functions; choose names that will not
     clash with the core's (``analyze``, ``plugins``) or other plugins'.
+    """
+
+
+@hookspec
+def forensics_synthetic_cases(seed: int, count: int) -> Iterable[SyntheticCase]:
+    """Generate photos with known ground truth that exercise this plugin's trace.
+
+    Return (or yield) about ``count`` authentic and ``count`` spliced
+    :class:`forensics_core.SyntheticCase` objects, built deterministically
+    from ``seed``: the same seed must give the same bytes. Spread the cases
+    over the conditions your detector's error rates depend on (JPEG quality,
+    size, kind of splice) and tag them in ``conditions``. ``forensics
+    validate synthetic`` runs every installed detector on every plugin's
+    cases. Keep each photo small enough (about 1-2 MP) for a suite of a few
+    hundred photos to run in minutes.
     """
