@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
-SCHEMA_VERSION = "1.0"
+SCHEMA_VERSION = "1.1"
 
 
 class Status(str, enum.Enum):
@@ -126,15 +126,55 @@ class DetectorFinding:
     error: str | None = None
 
 
+class Role(str, enum.Enum):
+    """What one detector's finding did in the fused verdict.
+
+    ``drove``: its test decided the outcome. ``counted``: its test entered the
+    combination without deciding it. ``advisory``: it ran and reports
+    observations but no test (e.g. metadata), so it counts for neither side.
+    ``not counted``: inconclusive, skipped or failed.
+    """
+
+    DROVE = "drove"
+    COUNTED = "counted"
+    ADVISORY = "advisory"
+    NOT_COUNTED = "not counted"
+
+
+@dataclass
+class Contribution:
+    """One detector's part in the verdict.
+
+    ``p_value`` is the p-value the policy took from the finding (its p-value,
+    or ``min(1, NFA)``); ``adjusted_p`` the same after the policy's correction
+    for several tests, where it has one.
+    """
+
+    detector: str
+    role: Role
+    p_value: float | None = None
+    adjusted_p: float | None = None
+
+
 @dataclass
 class Verdict:
-    """The fused outcome and how it was reached."""
+    """The fused outcome and how it was reached.
+
+    ``p_value`` is the single number the decision rests on (for example the
+    smallest Bonferroni-adjusted p-value, or Fisher's combined p-value) and
+    ``alpha`` the level, fixed in advance, it is compared with; both are None
+    when no test ran or the policy defines none. ``method`` states the rule.
+    """
 
     label: VerdictLabel
     score: float | None
     explanation: str
     policy: str
     drivers: list[str] = field(default_factory=list)
+    p_value: float | None = None
+    alpha: float | None = None
+    method: str = ""
+    contributions: list[Contribution] = field(default_factory=list)
 
 
 @dataclass
@@ -252,6 +292,9 @@ class Findings:
         ev["exif"] = ExifSummary(**exif)
         verdict = dict(data["verdict"])
         verdict["label"] = VerdictLabel(verdict["label"])
+        verdict["contributions"] = [
+            Contribution(**{**c, "role": Role(c["role"])}) for c in verdict.get("contributions", [])
+        ]
         return cls(
             schema_version=data["schema_version"],
             tool=Tool(**data["tool"]),

@@ -200,10 +200,20 @@ def command_line(findings: Findings) -> str:
 
 def _summary(findings: Findings) -> dict[str, Any]:
     verdict = findings.verdict
-    strength = wording.strength(verdict, findings.detectors)
+    strength = wording.strength(verdict)
+    roles = {c.detector: c for c in verdict.contributions}
+
+    def role(name: str) -> dict[str, str]:
+        c = roles.get(name)
+        if c is None:
+            return {"role": "", "role_words": "not stated by the policy", "adjusted_p": "—"}
+        return {"role": c.role.value.replace(" ", "-"), "role_words": wording.ROLE_WORDS[c.role],
+                "adjusted_p": _num(c.adjusted_p)}
+
     rows = [
         {"name": f.name, "version": f.version, "status": f.status.value, "status_words": wording.STATUS_WORDS[f.status],
-         "score": _num(f.score), "p_value": _num(f.p_value), "nfa": _num(f.nfa), "summary": f.summary, "error": f.error}
+         "score": _num(f.score), "p_value": _num(f.p_value), "nfa": _num(f.nfa), "summary": f.summary, "error": f.error,
+         **role(f.name)}
         for f in findings.detectors
     ]
     reading = {
@@ -221,8 +231,10 @@ def _summary(findings: Findings) -> dict[str, Any]:
         "explanation": verdict.explanation,
         "reading": reading,
         "policy": verdict.policy,
+        "method": verdict.method,
+        "drivers": verdict.drivers,
         "rows": rows,
-        "scale": wording.SCALE if strength.graded else (),
+        "scale": wording.scale(verdict.alpha) if strength.graded and verdict.alpha is not None else (),
     }
 
 

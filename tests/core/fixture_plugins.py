@@ -23,6 +23,19 @@ class Good(_Detector):
                               details={"mean_luma": mean, "level": params["level"]})
 
 
+class Reader:
+    """Reads the finding of ``good`` (declared in ``uses``), as the metadata detector reads the lens one."""
+
+    @hookimpl
+    def forensics_register_detectors(self):
+        return [DetectorSpec("reader", "1.0", "Reads good's finding.", uses=("good",))]
+
+    @hookimpl
+    def forensics_analyze(self, detector, evidence, params, prior):
+        seen = {name: f.details.get("mean_luma") for name, f in prior.items()}
+        return DetectorResult(Status.OK, "Observed.", score=0.0, details={"seen": seen})
+
+
 class Raising(_Detector):
     name = "raising"
 
@@ -105,6 +118,6 @@ class Metadata:
         return {"bytes": len(evidence.data)}
 
 
-good, raising, hanging, garbage = Good(), Raising(), Hanging(), Garbage()
+good, reader, raising, hanging, garbage = Good(), Reader(), Raising(), Hanging(), Garbage()
 out_of_range, crashing, mutating = OutOfRange(), Crashing(), Mutating()
 bad_registration, typo, wrong_args, raising_fusion, metadata = BadRegistration(), Typo(), WrongArgs(), RaisingFusion(), Metadata()
