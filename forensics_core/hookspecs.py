@@ -24,6 +24,7 @@ import pluggy
 
 if TYPE_CHECKING:
     import click
+    import numpy as np
 
     from .evidence import Evidence
     from .findings import DetectorFinding, DetectorResult, DetectorSpec, Verdict
@@ -131,4 +132,17 @@ def forensics_synthetic_cases(seed: int, count: int) -> Iterable[SyntheticCase]:
     validate synthetic`` runs every installed detector on every plugin's
     cases. Keep each photo small enough (about 1-2 MP) for a suite of a few
     hundred photos to run in minutes.
+    """
+
+
+@hookspec
+def forensics_localize(finding: DetectorFinding, shape: tuple[int, int]) -> np.ndarray | None:
+    """Turn one of this plugin's findings into a map of the pixels it flags.
+
+    Called by ``forensics validate`` to score localisation (MCC and IoU
+    against true masks), only on the plugin whose detector made ``finding``.
+    Return a boolean array of ``shape`` ``(H, W)`` (the stored grid), True
+    where the finding places manipulated content (all False when it found
+    none), or None when the detector does not localise or ``finding`` is not
+    yours. Build it from ``finding.details`` alone; the photo is not passed.
     """

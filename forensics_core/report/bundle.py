@@ -10,6 +10,7 @@ verification instead of passing with missing pieces.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Collection
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
@@ -83,7 +84,7 @@ def write_bundle(findings: Findings, evidence: Evidence, folder: Path, key: Exam
     """
     options = options or ReportOptions()
     report_date = options.report_date or _utc(datetime.now(timezone.utc))
-    options = ReportOptions(options.exhibit_id, options.paper, report_date)
+    options = dataclasses.replace(options, report_date=report_date)
     info = signature_info(key, findings.parameters.get("examiner"), organisation)
     report = render_html(findings, evidence, info, options, host=host)
     result = BundleResult()

@@ -27,7 +27,9 @@ from markupsafe import Markup
 from ..evidence import Evidence
 from ..findings import ExifSummary, Findings
 from ..plugins import PluginHost
+from ..validation.record import ValidationRecord, shipped_record
 from . import images, wording
+from .error_rates import ErrorRates, error_rates
 from .plugin_sections import DetectorSection, section_for
 
 TEMPLATES_PACKAGE = "forensics_core.templates"
@@ -69,11 +71,18 @@ class ReportOptions:
     paper : {"a4", "letter"}
     report_date : str or None
         ISO date-time (UTC) printed as the report's date; default now.
+    validation : ValidationRecord or None
+        The error-rate figures to state; default the record shipped with
+        the release (``make validate``), if any.
+    validation_source : str or None
+        Where ``validation`` was read from, as printed in the report.
     """
 
     exhibit_id: str | None = None
     paper: str = "a4"
     report_date: str | None = None
+    validation: ValidationRecord | None = None
+    validation_source: str | None = None
 
 
 @dataclass
@@ -238,6 +247,16 @@ def _summary(findings: Findings) -> dict[str, Any]:
     }
 
 
+def _error_rates(findings: Findings, options: ReportOptions) -> ErrorRates:
+    if options.validation is not None:
+        return error_rates(findings, options.validation, options.validation_source or "given by the examiner")
+    try:
+        shipped = shipped_record()
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        return ErrorRates(f"the record shipped with this release could not be read ({exc})", None)
+    return error_rates(findings, shipped, f"the record shipped with forensics {findings.tool.version}")
+
+
 def _stylesheet(paper: str) -> str:
     if paper not in PAPER_SIZES:
         raise ValueError(f"paper must be one of {', '.join(PAPER_SIZES)}")
@@ -301,6 +320,7 @@ def render_html(findings: Findings, evidence: Evidence, signature: SignatureInfo
         "signature": signature,
         "raw_tags": ev.exif.raw,
         "extra_metadata": ev.extra_metadata,
+        "error_rates": _error_rates(findings, options),
     }
     html = _environment().get_template("report.html.j2").render(context)
     return RenderedReport(html=html, sections=built)

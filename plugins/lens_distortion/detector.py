@@ -164,6 +164,21 @@ def _regions(records: list[dict[str, Any]]) -> list[dict[str, float]]:
     return [{"x0": round(float(x0), 1), "y0": round(float(y0), 1), "x1": round(float(x1), 1), "y1": round(float(y1), 1)}]
 
 
+def regions_mask(details: dict[str, Any], shape: tuple[int, int]) -> np.ndarray:
+    """Boolean ``(H, W)`` map of the boxes in ``details["regions_px"]`` (pixel coordinates, inclusive).
+
+    Only an outline of where the departing lines run: the pasted part
+    usually extends beyond them, so its localisation scores are a lower bound.
+    """
+    mask = np.zeros(shape, dtype=bool)
+    h, w = shape
+    for r in details.get("regions_px") or []:
+        x0, y0 = max(0, int(np.floor(r["x0"]))), max(0, int(np.floor(r["y0"])))
+        x1, y1 = min(w - 1, int(np.ceil(r["x1"]))), min(h - 1, int(np.ceil(r["y1"])))
+        mask[y0 : y1 + 1, x0 : x1 + 1] = True
+    return mask
+
+
 def _summary(result: ConsistencyResult, records: list[dict[str, Any]]) -> str:
     n_inf = sum(r["informative"] for r in records)
     if result.verdict == "inconclusive":

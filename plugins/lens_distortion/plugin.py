@@ -33,3 +33,19 @@ def forensics_register_commands(cli):
     from .synth import synth_command
 
     cli.add_command(synth_command, "synth")
+
+
+@hookimpl
+def forensics_synthetic_cases(seed, count):
+    from .synth import validation_cases
+
+    return validation_cases(seed, count)
+
+
+@hookimpl
+def forensics_localize(finding, shape):
+    if finding.name != NAME:
+        return None
+    from .detector import regions_mask
+
+    return regions_mask(finding.details, shape)

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import io
 import json
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -45,6 +45,8 @@ import click
 import numpy as np
 from PIL import Image
 from scipy import ndimage
+
+from forensics_core import SyntheticCase
 
 from .geometry import distort, norm_scale, to_normalised, to_pixels, undistort
 
@@ -1196,3 +1198,36 @@ def synth_command(
     arguments = {"kind": kind, "count": count, "seed": seed, "size": list(size), "k1": k1, **post}
     listing = {"generator": f"{__name__}.synth_command", "arguments": arguments, "images": entries}
     (out_dir / "truth.json").write_text(json.dumps(listing, indent=1, sort_keys=True) + "\n")
+
+
+# --------------------------------------------------------------------------- validation cases
+
+_CASE_SIZES = ((1200, 900), (1600, 1200))
+_CASE_QUALITIES = (75, 85, 95)
+
+
+def validation_cases(seed: int, count: int) -> Iterator[SyntheticCase]:
+    """``count`` authentic and ``count`` spliced photos for ``forensics validate``.
+
+    Each case draws its host lens (``|k1|`` in [0.03, 0.15], either sign),
+    size and JPEG quality from ``(seed, i)``; splices cycle through the
+    paper's three kinds. Conditions: ``kind``, ``jpeg_quality``, ``size``.
+    """
+    for i in range(count):
+        for spliced in (False, True):
+            rng = np.random.default_rng([seed, i, int(spliced)])
+            k1 = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.03, 0.15))
+            size = _CASE_SIZES[int(rng.integers(len(_CASE_SIZES)))]
+            quality = int(_CASE_QUALITIES[int(rng.integers(len(_CASE_QUALITIES)))])
+            kind = SPLICE_KINDS[i % len(SPLICE_KINDS)] if spliced else "authentic"
+            case_seed = int(rng.integers(2**31))
+            img = make_splice(kind, case_seed, size=size, k1=k1, jpeg_quality=quality)
+            yield SyntheticCase(
+                name=f"lens-{kind.replace('_', '-')}-{i:03d}",
+                data=img.jpeg_bytes,
+                suffix=".jpg",
+                spliced=spliced,
+                mask=img.mask,
+                conditions={"kind": kind if spliced else "none", "jpeg_quality": str(quality),
+                            "size": f"{size[0]}x{size[1]}"},
+            )

@@ -1,0 +1,282 @@
+"""The validation record (``validation.json``): what was measured, on what, with which tool.
+
+Built from the per-photo results of :mod:`.runner`; read back by the report's
+"Known error rates" section. :data:`FORMAT` names the layout; bump it when a
+field changes meaning.
+"""
+
+from __future__ import annotations
+
+import json
+from collections import defaultdict
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from importlib.resources import files
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..findings import Status, VerdictLabel
+from .metrics import FPR_TARGETS, Rate, auc_bootstrap_ci, rate, roc_auc, roc_curve, suspicion, tpr_at_fpr
+from .runner import CaseResult
+
+FORMAT = "forensics-validation/1"
+SHIPPED = "synthetic.json"
+"""The record of the built-in synthetic suite shipped in ``forensics_core/validation/`` (``make validate``)."""
+
+VERDICT = "verdict"
+"""Name under which the fused verdict's figures are recorded, beside the detectors'."""
+
+FOUND_IOU = 0.5
+
+
+@dataclass
+class OperatingPoint:
+    """The decision actually taken at a fixed rule: its hit and false-alarm rates (exact 95 % intervals)."""
+
+    rule: str
+    tpr: Rate
+    fpr: Rate
+
+
+@dataclass
+class ConditionMetrics:
+    """Figures for the photos carrying one condition tag value.
+
+    Spliced photos with the value are compared with authentic ones with the
+    same value when there are any (``authentic_pool`` ``"same"``), else with
+    all authentic photos (``"all"``, e.g. for the kind of splice).
+    """
+
+    key: str
+    value: str
+    n_spliced: int
+    n_authentic: int
+    authentic_pool: str
+    auc: float | None
+    tpr: Rate
+    fpr: Rate
+    declined: Rate
+
+
+@dataclass
+class Localisation:
+    """Pixel-level agreement with the true masks over the spliced photos that have one."""
+
+    n: int
+    mcc_mean: float
+    iou_mean: float
+    found: Rate
+    """Share of those photos with IoU >= :data:`FOUND_IOU`."""
+
+
+@dataclass
+class MethodMetrics:
+    """Error rates of one detector, or of the fused verdict."""
+
+    name: str
+    version: str
+    n_spliced: int
+    n_authentic: int
+    auc: float | None
+    auc_ci: tuple[float, float] | None
+    tpr_at_fpr: dict[str, float | None]
+    operating_point: OperatingPoint
+    declined_spliced: Rate
+    declined_authentic: Rate
+    errors: int
+    localisation: Localisation | None
+    by_condition: list[ConditionMetrics]
+    roc: list[tuple[float, float]]
+
+
+@dataclass
+class Dataset:
+    """Which photos were measured: ``content_sha256`` covers every photo's and mask's bytes and labels."""
+
+    name: str
+    source: str
+    content_sha256: str
+    n_cases: int
+    n_spliced: int
+    n_authentic: int
+    failed_intake: int
+    seed: int | None = None
+    count: int | None = None
+
+
+@dataclass
+class ValidationRecord:
+    format: str
+    created: str
+    tool: dict[str, str]
+    environment: dict[str, Any]
+    dataset: Dataset
+    fusion: dict[str, Any]
+    detector_params: dict[str, dict[str, Any]]
+    methods: list[MethodMetrics]
+    elapsed_s: float
+    cases: list[dict[str, Any]] = field(default_factory=list)
+
+    def method(self, name: str) -> MethodMetrics | None:
+        return next((m for m in self.methods if m.name == name), None)
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self, dict_factory=_plain), indent=1, ensure_ascii=False, allow_nan=False) + "\n"
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> ValidationRecord:
+        if data.get("format") != FORMAT:
+            raise ValueError(f"not a validation record of format {FORMAT} (found {data.get('format')!r})")
+
+        def r(d):
+            return Rate(d["k"], d["n"], d["value"], tuple(d["ci"]) if d["ci"] else None)
+
+        def method(m):
+            op = m["operating_point"]
+            loc = m["localisation"]
+            return MethodMetrics(
+                **{**m,
+                   "auc_ci": tuple(m["auc_ci"]) if m["auc_ci"] else None,
+                   "operating_point": OperatingPoint(op["rule"], r(op["tpr"]), r(op["fpr"])),
+                   "declined_spliced": r(m["declined_spliced"]), "declined_authentic": r(m["declined_authentic"]),
+                   "localisation": Localisation(loc["n"], loc["mcc_mean"], loc["iou_mean"], r(loc["found"])) if loc else None,
+                   "by_condition": [ConditionMetrics(**{**c, "tpr": r(c["tpr"]), "fpr": r(c["fpr"]),
+                                                        "declined": r(c["declined"])}) for c in m["by_condition"]],
+                   "roc": [tuple(p) for p in m["roc"]]})
+
+        return cls(**{**data, "dataset": Dataset(**data["dataset"]), "methods": [method(m) for m in data["methods"]]})
+
+
+def _plain(items: list[tuple[str, Any]]) -> dict[str, Any]:
+    return {k: (v.value if isinstance(v, (Status, VerdictLabel)) else v) for k, v in items}
+
+
+def read_record(path: Path) -> ValidationRecord:
+    """Read ``validation.json``; raises OSError or ValueError with a one-line reason."""
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not JSON ({exc.msg} at line {exc.lineno})") from None
+    try:
+        return ValidationRecord.from_dict(data)
+    except (KeyError, TypeError) as exc:
+        raise ValueError(f"{path}: malformed validation record ({exc})") from None
+
+
+def shipped_record() -> ValidationRecord | None:
+    """The record shipped with this release, or None when there is none."""
+    resource = files(__package__).joinpath(SHIPPED)
+    if not resource.is_file():
+        return None
+    return ValidationRecord.from_dict(json.loads(resource.read_text(encoding="utf-8")))
+
+
+# --------------------------------------------------------------------------- metrics of one method
+
+@dataclass(frozen=True)
+class _Row:
+    spliced: bool
+    conditions: Mapping[str, str]
+    suspicion: float
+    decided: bool
+    flagged: bool
+    errored: bool
+    mcc: float | None = None
+    iou: float | None = None
+
+
+def _method_metrics(name: str, version: str, rows: Sequence[_Row], rule: str) -> MethodMetrics:
+    pos = np.array([r.suspicion for r in rows if r.spliced])
+    neg = np.array([r.suspicion for r in rows if not r.spliced])
+    curve = roc_curve(pos, neg)
+    spl = [r for r in rows if r.spliced]
+    aut = [r for r in rows if not r.spliced]
+    loc = [r for r in spl if r.iou is not None]
+    localisation = None
+    if loc:
+        localisation = Localisation(len(loc), float(np.mean([r.mcc for r in loc])), float(np.mean([r.iou for r in loc])),
+                                    rate(sum(r.iou >= FOUND_IOU for r in loc), len(loc)))
+    return MethodMetrics(
+        name=name, version=version, n_spliced=len(spl), n_authentic=len(aut),
+        auc=roc_auc(pos, neg), auc_ci=auc_bootstrap_ci(pos, neg),
+        tpr_at_fpr={f"{t:g}": tpr_at_fpr(curve, t) for t in FPR_TARGETS},
+        operating_point=OperatingPoint(rule, rate(sum(r.flagged for r in spl), len(spl)),
+                                       rate(sum(r.flagged for r in aut), len(aut))),
+        declined_spliced=rate(sum(not r.decided for r in spl), len(spl)),
+        declined_authentic=rate(sum(not r.decided for r in aut), len(aut)),
+        errors=sum(r.errored for r in rows),
+        localisation=localisation,
+        by_condition=_by_condition(rows),
+        roc=curve,
+    )
+
+
+def _by_condition(rows: Sequence[_Row]) -> list[ConditionMetrics]:
+    values: dict[str, set[str]] = defaultdict(set)
+    for r in rows:
+        for k, v in r.conditions.items():
+            values[k].add(v)
+    out = []
+    for key in sorted(values):
+        for value in sorted(values[key]):
+            spl = [r for r in rows if r.spliced and r.conditions.get(key) == value]
+            same = [r for r in rows if not r.spliced and r.conditions.get(key) == value]
+            aut, pool = (same, "same") if same else ([r for r in rows if not r.spliced], "all")
+            if not spl and not same:
+                continue
+            subset = spl + same
+            out.append(ConditionMetrics(
+                key=key, value=value, n_spliced=len(spl), n_authentic=len(aut), authentic_pool=pool,
+                auc=roc_auc(np.array([r.suspicion for r in spl]), np.array([r.suspicion for r in aut])),
+                tpr=rate(sum(r.flagged for r in spl), len(spl)), fpr=rate(sum(r.flagged for r in aut), len(aut)),
+                declined=rate(sum(not r.decided for r in subset), len(subset)),
+            ))
+    return out
+
+
+def compute_methods(
+    results: Sequence[CaseResult], versions: Mapping[str, str], alpha: float
+) -> list[MethodMetrics]:
+    """Metrics of each detector and of the fused verdict over the photos that were taken in.
+
+    A detector's own operating point is "p-value below ``alpha``" (its test at
+    the fusion level, before any correction) or, for one that states no
+    p-value, "score above 0"; the verdict's is "inconsistent".
+    """
+    taken = [r for r in results if r.error is None]
+    methods = []
+    for name in sorted({n for r in taken for n in r.detectors}):
+        with_p = any(r.detectors[name].p_value is not None for r in taken if name in r.detectors)
+        rule = f"p-value below {alpha:g}" if with_p else "score above 0"
+
+        def row(r: CaseResult) -> _Row:
+            d = r.detectors.get(name)
+            if d is None:
+                return _Row(r.spliced, r.conditions, 0.0, False, False, True)
+            decided = d.status is Status.OK
+            flagged = decided and ((d.p_value is not None and d.p_value < alpha) if with_p else (d.score or 0.0) > 0.0)
+            return _Row(r.spliced, r.conditions, suspicion(d.p_value if with_p else None, d.score, decided),
+                        decided, flagged, d.status is Status.ERROR, d.mcc, d.iou)
+
+        methods.append(_method_metrics(name, versions.get(name, "unknown"), [row(r) for r in taken], rule))
+    verdict_rows = [
+        _Row(r.spliced, r.conditions, suspicion(r.verdict_p, None, r.verdict is not VerdictLabel.INCONCLUSIVE),
+             r.verdict is not VerdictLabel.INCONCLUSIVE, r.verdict is VerdictLabel.INCONSISTENT, False)
+        for r in taken
+    ]
+    methods.append(_method_metrics(VERDICT, "", verdict_rows, "verdict inconsistent with an original"))
+    return methods
+
+
+def case_rows(results: Sequence[CaseResult]) -> list[dict[str, Any]]:
+    """One compact line per photo for the record, so any figure can be recomputed by hand."""
+    return [
+        {"name": r.name, "spliced": r.spliced, "sha256": r.sha256, "conditions": r.conditions, "error": r.error,
+         "verdict": r.verdict.value if r.verdict else None, "verdict_p": r.verdict_p,
+         "detectors": {n: {"status": d.status.value, "p_value": d.p_value, "score": d.score, "iou": d.iou}
+                       for n, d in sorted(r.detectors.items())}}
+        for r in results
+    ]
+

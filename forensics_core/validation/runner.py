@@ -1,0 +1,174 @@
+"""Analyse every photo of a suite, in worker processes, and keep what the metrics need."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass, field
+from multiprocessing import get_context
+from pathlib import Path
+
+import numpy as np
+
+from ..analysis import Options, analyze_evidence
+from ..evidence import EvidenceError, load_evidence
+from ..findings import DetectorFinding, Findings, Status, VerdictLabel
+from ..output import write_atomic
+from ..plugins import PluginHost, one_line
+from .cases import Case, load_mask
+from .metrics import iou, mcc
+
+
+@dataclass
+class DetectorOutcome:
+    """One detector on one photo: its numbers, and its localisation scores where a true mask exists."""
+
+    status: Status
+    p_value: float | None
+    score: float | None
+    error: str | None
+    elapsed_s: float
+    mcc: float | None = None
+    iou: float | None = None
+
+
+@dataclass
+class CaseResult:
+    """Everything the metrics use about one photo; ``error`` when it could not be taken in."""
+
+    name: str
+    spliced: bool
+    conditions: dict[str, str]
+    sha256: str | None
+    verdict: VerdictLabel | None
+    verdict_p: float | None
+    detectors: dict[str, DetectorOutcome] = field(default_factory=dict)
+    error: str | None = None
+
+
+_HOST: PluginHost | None = None
+
+
+def _init_worker() -> None:
+    global _HOST
+    _HOST = PluginHost.from_entry_points()
+
+
+def _p(f: DetectorFinding) -> float | None:
+    if f.p_value is not None:
+        return f.p_value
+    return None if f.nfa is None else min(1.0, f.nfa)
+
+
+def _localise(host: PluginHost, finding: DetectorFinding, truth: np.ndarray) -> tuple[float, float] | None:
+    impl = host.implementation("forensics_localize", finding.plugin)
+    if impl is None or finding.status is Status.ERROR:
+        return None
+    try:
+        pred = impl(finding=finding, shape=truth.shape)
+    except Exception:
+        return None
+    if pred is None:
+        return None
+    pred = np.asarray(pred, dtype=bool)
+    if pred.shape != truth.shape:
+        return None
+    return mcc(pred, truth), iou(pred, truth)
+
+
+def analyse_case(case: Case, options: Options, findings_dir: Path) -> CaseResult:
+    """Analyse one photo in this worker; its findings are kept in ``findings_dir`` for audit."""
+    host = _HOST or PluginHost.from_entry_points()
+    base = CaseResult(case.name, case.spliced, dict(case.conditions), None, None, None)
+    try:
+        evidence = load_evidence(case.path, max_pixels=options.max_pixels)
+    except EvidenceError as exc:
+        base.error = str(exc)
+        return base
+    findings: Findings = analyze_evidence(evidence, host, options)
+    write_atomic(findings_dir / f"{case.name}.json", findings.to_json().encode("utf-8"))
+    truth = load_mask(case.mask, evidence.luma.shape) if case.mask is not None else None
+    for f in findings.detectors:
+        outcome = DetectorOutcome(f.status, _p(f), f.score, f.error, f.elapsed_s)
+        if truth is not None and case.spliced:
+            scores = _localise(host, f, truth)
+            if scores is not None:
+                outcome.mcc, outcome.iou = scores
+        base.detectors[f.name] = outcome
+    v = findings.verdict
+    base.sha256, base.verdict, base.verdict_p = evidence.info.sha256, v.label, v.p_value
+    return base
+
+
+def run_cases(
+    cases: Sequence[Case],
+    options: Options,
+    findings_dir: Path,
+    workers: int,
+    on_done: Callable[[CaseResult], None] = lambda r: None,
+) -> list[CaseResult]:
+    """Analyse ``cases`` with ``workers`` processes; results in the order of ``cases``.
+
+    A worker that dies costs only its photo, which is recorded with the error.
+    """
+    findings_dir.mkdir(parents=True, exist_ok=True)
+    results: dict[int, CaseResult] = {}
+    for index, result in _pool(cases, options, findings_dir, workers):
+        results[index] = result
+        on_done(result)
+    return [results[i] for i in range(len(cases))]
+
+
+def _new_executor(workers: int) -> ProcessPoolExecutor:
+    return ProcessPoolExecutor(max_workers=workers, mp_context=get_context("fork"), initializer=_init_worker)
+
+
+def _pool(cases: Sequence[Case], options: Options, findings_dir: Path, workers: int) -> Iterator[tuple[int, CaseResult]]:
+    # A dying worker breaks the whole pool and fails every photo in flight
+    # without saying which one killed it; so each in-flight photo is tried
+    # once more in a new pool and recorded as failed the second time.
+    workers = max(1, workers)
+    pending = list(range(len(cases)))
+    tries = dict.fromkeys(pending, 0)
+    executor = _new_executor(workers)
+    running: dict[Future, int] = {}
+    try:
+        while pending or running:
+            while pending and len(running) < 2 * workers:
+                i = pending.pop(0)
+                tries[i] += 1
+                running[executor.submit(analyse_case, cases[i], options, findings_dir)] = i
+            done, _ = wait(running, return_when=FIRST_COMPLETED)
+            broken = False
+            for fut in done:
+                i = running.pop(fut)
+                try:
+                    yield i, fut.result()
+                except BrokenProcessPool:
+                    broken = True
+                    if tries[i] < 2:
+                        pending.insert(0, i)
+                    else:
+                        yield i, _failed(cases[i], "the worker process died twice on this photo")
+                except Exception as exc:
+                    yield i, _failed(cases[i], f"internal error: {one_line(exc)}")
+            if broken:
+                # The others in flight were stopped by the same death: not their try.
+                for i in running.values():
+                    pending.insert(0, i)
+                    tries[i] -= 1
+                running = {}
+                executor.shutdown(wait=False, cancel_futures=True)
+                executor = _new_executor(workers)
+    finally:
+        executor.shutdown(wait=True, cancel_futures=True)
+
+
+def _failed(case: Case, reason: str) -> CaseResult:
+    return CaseResult(case.name, case.spliced, dict(case.conditions), None, None, None, error=reason)
+
+
+def default_workers() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
