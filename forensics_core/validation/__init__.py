@@ -76,7 +76,7 @@ def validate(
     """Analyse every case of ``suite``, then write ``validation.json`` and ``validation.html`` into ``out``."""
     started = time.perf_counter()
     params = resolve_params(host, options)
-    results = run_cases(suite.cases, options, out / "findings", workers, on_done)
+    results = run_cases(suite.cases, host, options, out / "findings", workers, on_done)
     versions = {n: d.spec.version for n, d in host.detectors.items()}
     record = ValidationRecord(
         format=FORMAT,

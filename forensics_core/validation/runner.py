@@ -48,12 +48,10 @@ class CaseResult:
     error: str | None = None
 
 
+# The plugins the workers use: set before the pool forks, so that every worker
+# inherits the caller's host (entry points or, in tests, fixture plugins)
+# without loading or pickling it again.
 _HOST: PluginHost | None = None
-
-
-def _init_worker() -> None:
-    global _HOST
-    _HOST = PluginHost.from_entry_points()
 
 
 def _p(f: DetectorFinding) -> float | None:
@@ -104,6 +102,7 @@ def analyse_case(case: Case, options: Options, findings_dir: Path) -> CaseResult
 
 def run_cases(
     cases: Sequence[Case],
+    host: PluginHost,
     options: Options,
     findings_dir: Path,
     workers: int,
@@ -113,6 +112,8 @@ def run_cases(
 
     A worker that dies costs only its photo, which is recorded with the error.
     """
+    global _HOST
+    _HOST = host
     findings_dir.mkdir(parents=True, exist_ok=True)
     results: dict[int, CaseResult] = {}
     for index, result in _pool(cases, options, findings_dir, workers):
@@ -122,7 +123,7 @@ def run_cases(
 
 
 def _new_executor(workers: int) -> ProcessPoolExecutor:
-    return ProcessPoolExecutor(max_workers=workers, mp_context=get_context("fork"), initializer=_init_worker)
+    return ProcessPoolExecutor(max_workers=workers, mp_context=get_context("fork"))
 
 
 def _pool(cases: Sequence[Case], options: Options, findings_dir: Path, workers: int) -> Iterator[tuple[int, CaseResult]]:
