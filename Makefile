@@ -12,7 +12,9 @@ OUT    ?= out
 # poppler's pdfsig, pdftoppm, pdftotext, pdfinfo and pdfdetach, and openssl.
 SYSTEM_PACKAGES := libpango-1.0-0 libpangoft2-1.0-0 libharfbuzz-subset0 fonts-dejavu-core poppler-utils openssl
 
-.PHONY: demo test bench check-python system-packages clean
+VALIDATION ?= out/validation
+
+.PHONY: demo test validate bench check-python system-packages clean
 
 demo: $(STAMP)
 	$(PY) -m forensics_core analyze $(SAMPLES) --out $(OUT) --case-id DEMO-1 --exhibit-id 1
@@ -23,9 +25,17 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest
 
+# The built-in synthetic suite; its record becomes the one shipped with the
+# release, which every report states unless the examiner names another.
+validate: $(STAMP)
+	$(PY) -m forensics_core validate synthetic --out $(VALIDATION)
+	cp $(VALIDATION)/validation.json forensics_core/validation/synthetic.json
+	@echo "shipped record: forensics_core/validation/synthetic.json; page: $(VALIDATION)/validation.html"
+
 bench: $(STAMP)
 	$(PY) benchmarks/lens.py
 	$(PY) benchmarks/report.py
+	$(PY) benchmarks/end_to_end.py
 
 check-python:
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "forensics needs Python >= 3.11; set PYTHON=python3.11 or newer")'
