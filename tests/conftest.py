@@ -1,14 +1,11 @@
 import json
 import shutil
-from importlib.metadata import EntryPoint
 from pathlib import Path
 
 import jsonschema
 import pytest
 
-from forensics_core import ENTRY_POINT_GROUP
 from forensics_core.findings import schema
-from forensics_core.plugins import PluginHost
 
 DATA = Path(__file__).parent / "data"
 
@@ -30,14 +27,6 @@ def photo(tmp_path) -> Path:
     target = tmp_path / "left01.jpg"
     shutil.copyfile(DATA / "calibration" / "left01.jpg", target)
     return target
-
-
-def fixture_host(*names: str, module: str = "fixture_plugins") -> PluginHost:
-    """A host with the named fixture plugins, loaded through real entry points."""
-    host = PluginHost(allow=None, deny=())
-    for name in names:
-        host.load_entry_point(EntryPoint(name, f"{module}:{name}", ENTRY_POINT_GROUP))
-    return host
 
 
 @pytest.fixture(scope="session")

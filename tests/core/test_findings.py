@@ -2,7 +2,7 @@
 
 import json
 
-from conftest import fixture_host
+from plugin_hosts import fixture_host
 
 from forensics_core import Findings, analyze
 from forensics_core.findings import DetectorResult, MalformedResult, Status, check_result

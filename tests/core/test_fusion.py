@@ -1,7 +1,7 @@
 """The fusion policies, the roles they give each detector, and detectors that read others' findings."""
 
 import pytest
-from conftest import fixture_host
+from plugin_hosts import fixture_host
 from scipy.stats import combine_pvalues
 
 from forensics_core import Status, VerdictLabel, analyze

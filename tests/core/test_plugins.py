@@ -4,7 +4,7 @@ import json
 from importlib.metadata import EntryPoint
 
 from click.testing import CliRunner
-from conftest import fixture_host
+from plugin_hosts import fixture_host
 
 from forensics_core import ENTRY_POINT_GROUP, Status, VerdictLabel, analyze
 from forensics_core.cli import cli

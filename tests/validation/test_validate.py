@@ -3,7 +3,7 @@
 import json
 
 import pytest
-from conftest import fixture_host
+from plugin_hosts import fixture_host
 
 from forensics_core.analysis import Options
 from forensics_core.validation import read_record, synthetic_suite, validate
