@@ -1,0 +1,163 @@
+"""The metadata detector: the checks examiners run first, as one typed result.
+
+Checks, in the report's order: EXIF present (:func:`.checks.exif_presence`),
+Software tag (:func:`.checks.software_tag`), DateTime vs DateTimeOriginal
+(:func:`.checks.datetimes`), EXIF pixel dimensions (:func:`.checks.dimensions`),
+embedded thumbnail (:mod:`.thumbnail`), JPEG quantisation tables
+(:mod:`.quantisation`) and the lens the EXIF names against the lens
+detector's measured distortion (:mod:`.lens_check`).
+
+Metadata is never proof on its own and is not a statistical test here: the
+result has no p-value and no NFA, so the fused verdict never rests on it. Its
+score is the share of applicable checks (outcome consistent or suspicious)
+that are suspicious.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from typing import Any
+
+from forensics_core import DetectorFinding, DetectorResult, DetectorSpec, Evidence, Status
+
+from . import lens_check
+from .checks import APPLICABLE, Check, datetimes, dimensions, dimensions_changed, exif_presence, software_tag
+from .quantisation import quantisation_check
+from .thumbnail import ThumbnailThresholds, thumbnail_check
+
+NAME = "metadata"
+VERSION = "1.0.0"
+
+REFERENCES = (
+    "CIPA DC-008-2019 / JEITA CP-3451E, Exchangeable image file format for digital still cameras: Exif Version 2.32, "
+    "2019 (tags DateTime, DateTimeOriginal, Software, PixelXDimension, IFD1 thumbnail).",
+    "ITU-T Rec. T.81 | ISO/IEC 10918-1, Digital compression and coding of continuous-tone still images, 1992, "
+    "Annex K (example quantisation tables); Independent JPEG Group, libjpeg 6b/9, jcparam.c (quality scaling).",
+    "H. Farid, Digital image ballistics from JPEG quantization, Dartmouth College TR2006-583, 2006.",
+    "E. Kee, M. K. Johnson, H. Farid, Digital image authentication from JPEG headers, IEEE Trans. Information "
+    "Forensics and Security 6(3), 1066-1075, 2011.",
+    "E. Kee, H. Farid, Digital image authentication from thumbnails, Proc. SPIE 7541, Media Forensics and "
+    "Security II, 2010 (thumbnails regenerated or left stale by editing; here the thumbnail's content is compared "
+    "with the image's).",
+    "lensfun lens database (lensfun project, bundled with lensfunpy), CC BY-SA 3.0; distortion models poly3, poly5 "
+    "and ptlens as documented in lensfun's lensfun.h.",
+    "H. Dersch, Panorama Tools, radial lens correction with coefficients a, b, c (the ptlens model "
+    "r_d = r_u (a r_u^3 + b r_u^2 + c r_u + 1 - a - b - c)).",
+)
+
+DEFAULT_PARAMS: dict[str, Any] = {
+    "datetime_tolerance_s": 2.0,
+    "own_table_makers": ["canon", "apple", "fujifilm"],
+    "thumbnail_max_bytes": 262144,
+    "thumbnail_max_pixels": 1048576,
+    "thumbnail_aspect_tolerance": 0.03,
+    "thumbnail_min_correlation": 0.9,
+    "thumbnail_blur_px": 1.5,
+    "thumbnail_change_threshold": 0.12,
+    "thumbnail_max_region_fraction": 0.005,
+    "lens_k1_tolerance": 0.02,
+    "lens_alpha": 0.01,
+    "lens_fit_grid": 64,
+}
+
+SPEC = DetectorSpec(
+    name=NAME,
+    version=VERSION,
+    description="Runs the examiner's first metadata checks (EXIF, software, dates, size, thumbnail, JPEG tables, "
+                "lens) and compares the lens the EXIF names with the measured distortion.",
+    references=REFERENCES,
+    default_params=DEFAULT_PARAMS,
+    uses=(lens_check.LENS_DETECTOR,),
+)
+
+
+def thresholds(params: Mapping[str, Any]) -> ThumbnailThresholds:
+    """The thumbnail check's limits from the detector's parameters."""
+    return ThumbnailThresholds(
+        max_bytes=int(params["thumbnail_max_bytes"]),
+        max_pixels=int(params["thumbnail_max_pixels"]),
+        aspect_tolerance=float(params["thumbnail_aspect_tolerance"]),
+        min_correlation=float(params["thumbnail_min_correlation"]),
+        blur_px=float(params["thumbnail_blur_px"]),
+        change_threshold=float(params["thumbnail_change_threshold"]),
+        max_region_fraction=float(params["thumbnail_max_region_fraction"]),
+    )
+
+
+def _summary(checks: list[Check]) -> str:
+    suspicious = [c.title for c in checks if c.outcome == "suspicious"]
+    applicable = [c for c in checks if c.outcome in APPLICABLE]
+    if not applicable:
+        return ("Inconclusive: the file carries no metadata these checks can use, which says nothing either way "
+                "about the photo.")
+    if suspicious:
+        return (f"{len(suspicious)} of {len(applicable)} applicable metadata checks are suspicious "
+                f"({'; '.join(suspicious)}); metadata is never proof on its own.")
+    return (f"All {len(applicable)} applicable metadata checks are consistent with a camera original; "
+            "metadata is never proof on its own.")
+
+
+def analyse(evidence: Evidence, params: Mapping[str, Any], prior: Mapping[str, DetectorFinding]) -> DetectorResult:
+    """Run every metadata check on the evidence.
+
+    Parameters
+    ----------
+    evidence : Evidence
+        Read, never written: ``info`` (EXIF summary, format, size, quantisation
+        tables), ``data`` (for the thumbnail) and ``pixels`` (to compare with it).
+    params : mapping
+        :data:`DEFAULT_PARAMS` with the user's overrides.
+    prior : mapping
+        Findings of this run; ``prior["lens_distortion"]`` when the lens detector ran.
+
+    Returns
+    -------
+    DetectorResult
+        ``ok`` with ``score`` = share of applicable checks that are suspicious
+        and no p-value; ``inconclusive`` when no check applies.
+    """
+    info = evidence.info
+    marks: dict[str, float] = {}
+    t = time.perf_counter()
+    checks = [exif_presence(info), software_tag(info), datetimes(info, float(params["datetime_tolerance_s"])),
+              dimensions(info)]
+    marks["tags"] = round(time.perf_counter() - t, 4)
+
+    t = time.perf_counter()
+    limits = thresholds(params)
+    thumb, thumb_details = thumbnail_check(evidence.data, info.format, evidence.pixels, limits)
+    checks.append(thumb)
+    marks["thumbnail"] = round(time.perf_counter() - t, 4)
+
+    t = time.perf_counter()
+    quant, est = quantisation_check(info.quantization_tables, info.format, info.exif.make,
+                                    [str(m).casefold() for m in params["own_table_makers"]])
+    checks.append(quant)
+    marks["quantisation"] = round(time.perf_counter() - t, 4)
+
+    t = time.perf_counter()
+    tol, alpha = float(params["lens_k1_tolerance"]), float(params["lens_alpha"])
+    comparison = lens_check.compare(info, prior.get(lens_check.LENS_DETECTOR), dimensions_changed(info),
+                                    tol, alpha, int(params["lens_fit_grid"]))
+    checks.append(lens_check.lens_check(comparison, tol, alpha))
+    marks["lens"] = round(time.perf_counter() - t, 4)
+
+    applicable = [c for c in checks if c.outcome in APPLICABLE]
+    n_suspicious = sum(c.outcome == "suspicious" for c in checks)
+    details = {
+        "checks": [{"id": c.id, "title": c.title, "outcome": c.outcome, "observation": c.observation} for c in checks],
+        "n_applicable": len(applicable),
+        "n_suspicious": n_suspicious,
+        "thumbnail": thumb_details,
+        "quantisation": None if est is None else {
+            "n_tables": est.n_tables, "standard_ijg": est.standard_ijg, "quality": est.quality,
+            "mean_abs_deviation": est.mean_abs_deviation,
+        },
+        "lens": lens_check.details(comparison, tol, alpha),
+        "image_size": [info.width, info.height],
+        "elapsed_s": marks,
+    }
+    if not applicable:
+        return DetectorResult(Status.INCONCLUSIVE, _summary(checks), details=details)
+    return DetectorResult(Status.OK, _summary(checks), score=n_suspicious / len(applicable), details=details)
