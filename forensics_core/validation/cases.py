@@ -172,7 +172,7 @@ def write_synthetic(generated: Iterable[tuple[str, SyntheticCase]], folder: Path
     """Write plugins' synthetic cases as files (photo, and mask as PNG) under ``folder``.
 
     ``generated`` yields ``(plugin name, case)``; the plugin name prefixes
-    each case's name and becomes the ``source`` condition.
+    each case's name and becomes the ``generator`` condition.
     """
     folder.mkdir(parents=True, exist_ok=True)
     cases = []
@@ -184,7 +184,7 @@ def write_synthetic(generated: Iterable[tuple[str, SyntheticCase]], folder: Path
         if sc.mask is not None:
             mask_path = folder / f"{name}.mask.png"
             Image.fromarray(np.asarray(sc.mask, dtype=bool).astype(np.uint8) * 255).save(mask_path)
-        cases.append(Case(name, path, sc.spliced, mask_path, {"source": plugin, **dict(sc.conditions)}))
+        cases.append(Case(name, path, sc.spliced, mask_path, {**dict(sc.conditions), "generator": plugin}))
     return cases
 
 

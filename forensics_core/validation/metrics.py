@@ -109,7 +109,7 @@ def mcc(pred: np.ndarray, truth: np.ndarray) -> float:
 def iou(pred: np.ndarray, truth: np.ndarray) -> float:
     """Intersection over union of two boolean maps (0 when both are empty)."""
     union = np.count_nonzero(pred | truth)
-    return 0.0 if union == 0 else float(np.count_nonzero(pred & truth)) / union
+    return 0.0 if union == 0 else float(np.count_nonzero(pred & truth) / union)
 
 
 def suspicion(p_value: float | None, score: float | None, decided: bool) -> float:

@@ -1,0 +1,103 @@
+"""Time and peak memory of the JPEG grid detector on a 4000 x 3000 photo.
+
+Usage: ``python benchmarks/jpeg_grid.py [--runs 5] [--size 4000x3000]``
+
+A synthetic spliced JPEG (host quality 85, a region from a copy compressed at
+quality 80 on the grid (3, 5), the whole saved again at quality 96) is
+rendered once into ``benchmarks/out/``, so every stage, region growing
+included, has work to do. Each run then analyses it in a fresh process, so
+import costs and memory of one run do not leak into the next; numba's
+compiled kernels are cached on disk by the first run (its compile time is
+printed separately). Printed: the median and range over the runs of each stage
+(decode = intake with hashing; the detector's own stages as it records them;
+report figures = the section's two PNGs) and of the peak resident memory of
+the analysing process (``VmHWM``, which includes the interpreter and the
+imported libraries, measured separately as ``baseline``).
+Target (issue 5): detector <= 3 s on a 2-core machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+
+OUT = Path(__file__).resolve().parent / "out"
+
+_CHILD = r"""
+import json, re, sys, time
+def hwm_mb():
+    status = open("/proc/self/status").read()
+    return int(re.search(r"VmHWM:\s+(\d+) kB", status).group(1)) / 1024
+import forensics_core
+from forensics_core.evidence import load_evidence
+from forensics_plugins.jpeg_grid.detector import DEFAULT_PARAMS, analyse
+from forensics_plugins.jpeg_grid.figures import map_png, vote_map_png
+base = hwm_mb()
+t0 = time.perf_counter()
+ev = load_evidence(sys.argv[1])
+t1 = time.perf_counter()
+result = analyse(ev, DEFAULT_PARAMS)
+t2 = time.perf_counter()
+map_png(ev.pixels, result.details)
+vote_map_png(result.details)
+t3 = time.perf_counter()
+stages = {"decode+hash": t1 - t0, **result.details["elapsed_s"], "detector total": t2 - t1, "report figures": t3 - t2}
+regions = [r for r in result.details["regions"] if r["meaningful"]]
+print(json.dumps({"stages": stages, "peak_mb": hwm_mb(), "baseline_mb": base, "status": result.status.value,
+                  "regions": [[r["grid"], r["bbox_px"], r["log10_nfa"]] for r in regions]}))
+"""
+
+
+def photo(size: tuple[int, int]) -> Path:
+    path = OUT / f"jpeg_grid_{size[0]}x{size[1]}.jpg"
+    if not path.exists():
+        from forensics_plugins.jpeg_grid.synth import make_spliced
+
+        OUT.mkdir(parents=True, exist_ok=True)
+        case = make_spliced(11, "splice", size=(size[1], size[0]), quality=85, paste_quality=80, final_quality=96,
+                            source="coffee", shift=(3, 5))
+        path.write_bytes(case.data)
+    return path
+
+
+def _warm(target: Path) -> float:
+    """Compile (or load) the numba kernels once; returns the seconds it took."""
+    code = ("import time, numpy as np; t = time.perf_counter(); "
+            "from forensics_plugins.jpeg_grid.zeros import zero_counts; "
+            "from forensics_plugins.jpeg_grid.votes import vote_map, cell_tally; "
+            "z = zero_counts(np.zeros((64, 64), np.float32), (0.5, 1.5))[0]; cell_tally(vote_map(z)); "
+            "print(time.perf_counter() - t)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    return float(out.stdout)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--size", default="4000x3000")
+    args = parser.parse_args()
+    size = tuple(int(v) for v in args.size.lower().split("x"))
+    target = photo(size)
+    first = _warm(target)
+    runs = []
+    for _ in range(args.runs):
+        out = subprocess.run([sys.executable, "-c", _CHILD, str(target)], capture_output=True, text=True, check=True)
+        runs.append(json.loads(out.stdout))
+    print(f"jpeg_grid on {target.name} ({size[0]}x{size[1]}), {args.runs} runs, status {runs[0]['status']}, "
+          f"meaningful regions {runs[0]['regions']}")
+    print(f"kernel compile/load before the runs: {first:.2f} s")
+    print(f"{'stage':<22}{'median s':>10}{'min s':>10}{'max s':>10}")
+    for stage in runs[0]["stages"]:
+        values = [r["stages"][stage] for r in runs]
+        print(f"{stage:<22}{statistics.median(values):>10.3f}{min(values):>10.3f}{max(values):>10.3f}")
+    peaks = [r["peak_mb"] for r in runs]
+    print(f"{'peak RSS MB':<22}{statistics.median(peaks):>10.0f}{min(peaks):>10.0f}{max(peaks):>10.0f}")
+    print(f"{'baseline RSS MB':<22}{statistics.median(r['baseline_mb'] for r in runs):>10.0f}")
+
+
+if __name__ == "__main__":
+    main()

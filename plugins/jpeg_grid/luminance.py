@@ -1,0 +1,100 @@
+"""The luminance ZERO counts zeros on, taken as close as possible to what the decoder produced.
+
+For a JPEG, the luminance channel is decoded directly (libjpeg asked for
+YCbCr output through Pillow's ``draft``), so each pixel is the decoder's Y
+value exactly: the inverse DCT of the quantised coefficients, rounded and
+clipped. Recomputing Y from the decoded RGB would add the colour conversion's
+rounding (up to a grey level, and more where RGB was clipped), which blurs
+the zeros ZERO counts. Other formats (and JPEGs in other colour spaces, e.g.
+CMYK) use the stored grid's BT.601 luma, rounded to integers as a JPEG
+decoder's output is.
+"""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+
+import numpy as np
+from PIL import Image
+
+from forensics_core import Evidence
+
+# Below this side no 8x8 block has room to vote on all 64 grid origins and
+# leave a meaningful count.
+MIN_SIDE = 32
+
+
+@dataclass(frozen=True)
+class Luminance:
+    """The analysed luminance and where it came from.
+
+    Attributes
+    ----------
+    y : ndarray, shape (H, W), float32
+        Grey levels 0-255, integer-valued.
+    source : str
+        ``"jpeg_y"`` (decoded Y channel), ``"jpeg_grey"`` (greyscale JPEG) or
+        ``"luma"`` (rounded BT.601 luma of the stored pixels).
+    note : str
+        One sentence for the report on how ``y`` was obtained.
+    table : ndarray, shape (8, 8), or None
+        Luminance quantisation table of the file's (last) JPEG compression, in
+        natural (row-major) order; None when the file is not a JPEG.
+    """
+
+    y: np.ndarray
+    source: str
+    note: str
+    table: np.ndarray | None
+
+
+def _decoded_y(data: bytes) -> tuple[np.ndarray, str] | None:
+    """The decoder's own Y (or grey) channel of a JPEG, or None when it cannot give one."""
+    try:
+        with Image.open(io.BytesIO(data), formats=("JPEG",)) as img:
+            if img.mode == "L":
+                img.load()
+                return np.asarray(img, dtype=np.float32), "jpeg_grey"
+            if img.mode != "RGB":
+                return None
+            img.draft("YCbCr", img.size)
+            if img.mode != "YCbCr":
+                return None
+            img.load()
+            return np.asarray(img)[..., 0].astype(np.float32), "jpeg_y"
+    except (OSError, SyntaxError, ValueError, EOFError, IndexError):
+        return None
+
+
+def _luma(evidence: Evidence) -> np.ndarray:
+    return np.round(np.clip(evidence.luma, 0.0, 1.0) * 255.0).astype(np.float32)
+
+
+def luminance(evidence: Evidence) -> Luminance:
+    """The luminance to analyse and the file's luminance quantisation table.
+
+    Parameters
+    ----------
+    evidence : Evidence
+        Read only; for a JPEG its bytes are decoded again into Y.
+
+    Returns
+    -------
+    Luminance
+    """
+    table = None
+    raw = evidence.info.quantization_tables.get("0")
+    if evidence.info.format == "JPEG" and raw is not None and len(raw) == 64:
+        table = np.asarray(raw, dtype=np.float64).reshape(8, 8)
+    if evidence.info.format == "JPEG":
+        decoded = _decoded_y(evidence.data)
+        if decoded is not None and decoded[0].shape == evidence.pixels.shape[:2]:
+            y, source = decoded
+            note = ("the JPEG's luminance channel exactly as decoded (no colour conversion)"
+                    if source == "jpeg_y" else "the greyscale JPEG's decoded channel")
+            return Luminance(y=y, source=source, note=note, table=table)
+        return Luminance(y=_luma(evidence), source="luma", table=table,
+                         note="the BT.601 luma of the decoded pixels, rounded (the JPEG's Y channel was not available)")
+    return Luminance(y=_luma(evidence), source="luma", table=None,
+                     note="the BT.601 luma of the stored pixels, rounded to grey levels")

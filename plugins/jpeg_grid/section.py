@@ -1,0 +1,82 @@
+"""The JPEG grid section of the evidence report."""
+
+from __future__ import annotations
+
+from importlib.resources import files
+from typing import Any
+
+from forensics_core import DetectorFinding, Evidence, Status
+from forensics_core.report import Figure, ReportSection
+
+from .detector import REFERENCES
+from .figures import map_png, vote_map_png
+from .nfa import nfa_text
+
+_STAGE_WORDS = {
+    "foreign": "ZERO vote",
+    "missing": "main grid missing",
+    "hidden": "second vote",
+}
+
+
+def _region_rows(regions: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    return [{
+        "id": r["id"], "grid": f"({r['grid'][0]}, {r['grid'][1]})", "stage": _STAGE_WORDS.get(r["stage"], r["stage"]),
+        "x": f"{r['bbox_px'][0]}-{r['bbox_px'][2]}", "y": f"{r['bbox_px'][1]}-{r['bbox_px'][3]}",
+        "area": f"{100 * r['area_fraction']:.1f} %", "density": f"{100 * r['density']:.1f} %",
+        "p_null": f"{100 * r['p_null']:.2f} %", "nfa": nfa_text(r["log10_nfa"]),
+        "css": "line-flagged" if r["meaningful"] else "",
+        "verdict": "meaningful" if r["meaningful"] else "not meaningful",
+    } for r in regions]
+
+
+def _vote_table(shares: list[list[float]], main: list[int]) -> list[list[dict[str, Any]]]:
+    return [[{"text": f"{100 * s:.1f}", "main": [dx, dy] == main} for dx, s in enumerate(row)]
+            for dy, row in enumerate(shares)]
+
+
+def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSection:
+    """The section for one JPEG grid finding: map, grid, regions, test, method and limitations."""
+    details = finding.details
+    main = details["main_grid"]
+    regions = details.get("regions", [])
+    meaningful = [r for r in regions if r["meaningful"]]
+    thresholds = details["thresholds"]
+    if finding.status is not Status.OK:
+        decision = "no decision: the photo carries no significant JPEG grid"
+    elif meaningful:
+        decision = f"{len(meaningful)} region(s) compressed on another grid"
+    else:
+        decision = "no region departs from the main grid"
+    context = {
+        "ok": finding.status is Status.OK,
+        "main": main,
+        "main_nfa": nfa_text(main["log10_nfa"]),
+        "cropped": details.get("cropped", False),
+        "quality": details.get("jpeg_quality_estimate"),
+        "luminance_note": details["luminance"]["note"],
+        "regions": _region_rows(regions),
+        "n_meaningful": len(meaningful),
+        "vote_table": _vote_table(details["vote_shares"], main["origin"]) if "vote_shares" in details else [],
+        "thresholds": thresholds,
+        "n_tests": nfa_text(details["log10_n_tests"]) if "log10_n_tests" in details else None,
+        "vote_maps": {1: "one vote map", 2: "two vote maps"}.get(details.get("vote_maps"), ""),
+        "decision": decision,
+        "references": list(REFERENCES),
+    }
+    figures = {}
+    if details.get("map") and finding.status is Status.OK:
+        figures["map"] = Figure(map_png(evidence.pixels, details), "image/png",
+                                "The photo with the regions whose pixels vote for another JPEG grid (labelled with "
+                                "its origin (dx, dy)) or lack the main grid (\"no main grid\"), numbered as in the "
+                                "table: filled red, meaningful (NFA below the threshold); orange outline, the "
+                                "strongest candidate when none is.")
+    if details.get("map"):
+        figures["votes"] = Figure(vote_map_png(details), "image/png",
+                                  "Share of the pixels voting for the main (most voted) grid, per block of the photo "
+                                  "(black 0 %, white 100 %; dark blue: border or clipped pixels, no vote), with the "
+                                  "regions outlined. Flat areas, where every block ties, are dark too. A pasted region "
+                                  "whose grid shows through is dark here; one compressed again with the whole photo is "
+                                  "not, and is found by the second vote.")
+    template = files(__package__).joinpath("templates/section.html.j2").read_text(encoding="utf-8")
+    return ReportSection(title="JPEG block grid", template=template, context=context, figures=figures)

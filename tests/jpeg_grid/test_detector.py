@@ -1,0 +1,213 @@
+"""The JPEG grid detector on whole files: grids, regions, hostile input, determinism."""
+
+import io
+import json
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from forensics_core import EvidenceError, Status, load_evidence
+from forensics_core.findings import check_result
+from forensics_plugins.jpeg_grid import synth
+from forensics_plugins.jpeg_grid.detector import DEFAULT_PARAMS, analyse, ijg_quality
+from forensics_plugins.jpeg_grid.figures import tiles_mask
+from forensics_plugins.jpeg_grid.luminance import luminance
+
+SIZE = (256, 320)
+
+
+def _file(tmp_path, name, data):
+    path = tmp_path / name
+    path.write_bytes(data)
+    return path
+
+
+def _region_mask(region, details):
+    cell = details["map"]["cell_px"]
+    tiles = tiles_mask(region["tiles_rle"], tuple(details["map"]["tiles_shape"]))
+    return np.kron(tiles, np.ones((cell, cell), bool))
+
+
+def _iou(region, details, truth):
+    m = _region_mask(region, details)
+    t = truth[: m.shape[0], : m.shape[1]]
+    return (m & t).sum() / ((m | t).sum() + (truth.sum() - t.sum()))
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return synth.render_scene(np.random.default_rng(4), SIZE, "coffee")
+
+
+def test_single_compression_main_grid_at_origin_and_no_region(tmp_path, scene):
+    ev = load_evidence(_file(tmp_path, "a.jpg", synth.jpeg_bytes(scene, 85)))
+    result = check_result(analyse(ev, DEFAULT_PARAMS))
+    d = result.details
+    assert result.status is Status.OK, result.summary
+    assert d["main_grid"]["origin"] == [0, 0] and d["main_grid"]["log10_nfa"] < -100
+    assert not d["cropped"]
+    assert not any(r["meaningful"] for r in d["regions"])
+    assert result.nfa == 1.0 and result.score == 0.0
+    assert d["luminance"]["source"] == "jpeg_y"
+    assert d["jpeg_quality_estimate"] == 85
+
+
+def test_crop_moves_the_main_grid_and_is_reported_but_not_a_splice(tmp_path, scene):
+    decoded = synth.decode_cropped(synth.jpeg_bytes(scene, 80))
+    buf = io.BytesIO()
+    Image.fromarray(decoded[5:, 3:]).save(buf, format="PNG")
+    result = analyse(load_evidence(_file(tmp_path, "c.png", buf.getvalue())), DEFAULT_PARAMS)
+    d = result.details
+    assert result.status is Status.OK
+    assert d["main_grid"]["origin"] == [5, 3] and d["cropped"]
+    assert "cropped" in result.summary
+    assert not any(r["meaningful"] for r in d["regions"])
+    assert d["luminance"]["source"] == "luma" and d["jpeg_quality_estimate"] is None
+
+
+@pytest.mark.parametrize("kind, final_quality", [("splice", 100), ("copy_move", 98)])
+def test_region_on_a_shifted_grid_is_found(tmp_path, kind, final_quality):
+    case = synth.make_spliced(21, kind, size=(384, 512), quality=85, paste_quality=80, final_quality=final_quality,
+                              shift=(3, 6))
+    result = check_result(analyse(load_evidence(_file(tmp_path, "s.jpg", case.data)), DEFAULT_PARAMS))
+    d = result.details
+    hits = [r for r in d["regions"] if r["meaningful"]]
+    assert result.status is Status.OK and hits, result.summary
+    best = hits[0]
+    assert best["grid"] == [3, 6]
+    assert _iou(best, d, case.mask) >= 0.5
+    assert result.nfa < 1e-10 and result.score > 0.99
+    for key in ("id", "stage", "grid", "bbox_px", "area_px", "votes", "density", "p_null", "log10_nfa", "tiles_rle"):
+        assert key in best
+
+
+def test_region_missing_the_main_grid_is_found(tmp_path):
+    case = synth.make_uncompressed_paste(4, size=(384, 512), quality=85)
+    result = check_result(analyse(load_evidence(_file(tmp_path, "m.png", case.data)), DEFAULT_PARAMS))
+    hits = [r for r in result.details["regions"] if r["meaningful"]]
+    assert result.status is Status.OK and hits, result.summary
+    assert hits[0]["stage"] == "missing" and hits[0]["grid"] == [0, 0]
+    assert _iou(hits[0], result.details, case.mask) >= 0.5
+    assert "missing" in result.summary
+
+
+def test_never_compressed_is_inconclusive_not_clean(tmp_path):
+    data, _ = synth.make_never_compressed(2, size=SIZE)
+    result = check_result(analyse(load_evidence(_file(tmp_path, "n.png", data)), DEFAULT_PARAMS))
+    assert result.status is Status.INCONCLUSIVE
+    assert result.score is None and result.nfa is None and result.p_value is None
+    assert "never JPEG-compressed" in result.summary
+    assert result.details["main_grid"]["log10_nfa"] >= 0
+
+
+def test_same_input_same_result(tmp_path):
+    case = synth.make_spliced(5, "splice", size=SIZE, final_quality=97)
+    ev = load_evidence(_file(tmp_path, "d.jpg", case.data))
+    first = check_result(analyse(ev, DEFAULT_PARAMS))
+    second = check_result(analyse(ev, DEFAULT_PARAMS))
+    strip = lambda d: {k: v for k, v in d.items() if k != "elapsed_s"}  # noqa: E731
+    assert json.dumps(strip(first.details), sort_keys=True) == json.dumps(strip(second.details), sort_keys=True)
+    assert (first.status, first.summary, first.nfa) == (second.status, second.summary, second.nfa)
+
+
+def test_pixels_and_bytes_are_left_untouched(tmp_path, scene):
+    ev = load_evidence(_file(tmp_path, "u.jpg", synth.jpeg_bytes(scene, 90)))
+    before = (ev.pixels.copy(), bytes(ev.data))
+    analyse(ev, DEFAULT_PARAMS)
+    assert np.array_equal(ev.pixels, before[0]) and ev.data == before[1]
+    assert not ev.pixels.flags.writeable
+
+
+def _png(arr, mode=None):
+    buf = io.BytesIO()
+    img = Image.fromarray(arr) if mode is None else Image.fromarray(arr).convert(mode)
+    img.save(buf, format="PNG")
+    return buf.getvalue()
+
+
+def _jpeg(arr, **kw):
+    buf = io.BytesIO()
+    Image.fromarray(arr).save(buf, format="JPEG", **kw)
+    return buf.getvalue()
+
+
+def _with_segment(jpeg, segment):
+    """``jpeg`` with ``segment`` inserted right after SOI."""
+    return jpeg[:2] + segment + jpeg[2:]
+
+
+def _hostile(scene):
+    grey = scene[..., 1]
+    cmyk = io.BytesIO()
+    Image.fromarray(scene).convert("CMYK").save(cmyk, format="JPEG", quality=90)
+    good = _jpeg(scene, quality=90)
+    return {
+        "1x1.png": _png(np.zeros((1, 1, 3), np.uint8)),
+        "7x9.jpg": _jpeg(np.full((9, 7, 3), 120, np.uint8)),
+        "31x200.jpg": _jpeg(np.zeros((31, 200, 3), np.uint8)),
+        "grey.jpg": _jpeg(grey, quality=80),
+        "16bit.png": _png((grey.astype(np.uint16) * 257)),
+        "rgba.png": _png(np.dstack([scene, np.full(grey.shape, 200, np.uint8)])),
+        "palette.png": _png(scene, "P"),
+        "cmyk.jpg": cmyk.getvalue(),
+        "flat.jpg": _jpeg(np.full((200, 200, 3), 255, np.uint8), quality=75),
+        # Malformed marker segments the decoder skips: EXIF of garbage, an empty comment, a short APP0.
+        "exif_garbage.jpg": _with_segment(good, b"\xff\xe1\x00\x10Exif\x00\x00garbage!"),
+        "comment_empty.jpg": _with_segment(good, b"\xff\xfe\x00\x02"),
+        "app0_short.jpg": _with_segment(good, b"\xff\xe0\x00\x04JF"),
+        # Malformed segments the intake refuses: a length running past the data, a DQT of garbage.
+        "bad_app.jpg": _with_segment(good, b"\xff\xef\x00\x40garbage"),
+        "bad_dqt.jpg": _with_segment(good, b"\xff\xdb\x00\x05\x7f\x01\x02"),
+        "truncated.jpg": good[: len(good) // 2],
+    }
+
+
+def test_hostile_inputs_give_a_result_or_a_refused_intake(tmp_path, scene):
+    statuses = {}
+    for name, data in _hostile(scene).items():
+        try:
+            ev = load_evidence(_file(tmp_path, name, data))
+        except EvidenceError as exc:
+            statuses[name] = f"refused: {exc}"
+            continue
+        result = check_result(analyse(ev, DEFAULT_PARAMS))
+        assert result.status in (Status.OK, Status.INCONCLUSIVE, Status.SKIPPED), name
+        if result.status is not Status.OK:
+            assert result.summary.startswith("Inconclusive") and result.score is None, name
+        statuses[name] = result.status.value
+    print(statuses)
+    assert statuses["1x1.png"] == statuses["7x9.jpg"] == statuses["31x200.jpg"] == "inconclusive"
+    for name in ("grey.jpg", "exif_garbage.jpg", "comment_empty.jpg", "app0_short.jpg"):
+        assert statuses[name] == "ok", name
+    assert statuses["flat.jpg"] == "inconclusive"
+    for name in ("16bit.png", "rgba.png", "palette.png"):
+        assert statuses[name] == "inconclusive", name
+
+
+def test_greyscale_and_cmyk_jpegs_use_the_right_channel(tmp_path, scene):
+    grey = load_evidence(_file(tmp_path, "g.jpg", _jpeg(scene[..., 0], quality=80)))
+    assert luminance(grey).source == "jpeg_grey"
+    cmyk = io.BytesIO()
+    Image.fromarray(scene).convert("CMYK").save(cmyk, format="JPEG", quality=90)
+    lum = luminance(load_evidence(_file(tmp_path, "k.jpg", cmyk.getvalue())))
+    assert lum.source == "luma" and lum.table is not None
+
+
+def test_decoded_y_is_the_decoder_output(tmp_path, scene):
+    data = synth.jpeg_bytes(scene, 90)
+    ev = load_evidence(_file(tmp_path, "y.jpg", data))
+    lum = luminance(ev)
+    img = Image.open(io.BytesIO(data))
+    img.draft("YCbCr", img.size)
+    np.testing.assert_array_equal(lum.y, np.asarray(img)[..., 0])
+    # The luma of the decoded RGB differs by colour conversion rounding.
+    assert np.abs(lum.y - ev.luma * 255).max() > 0.5
+
+
+def test_ijg_quality_estimate():
+    for q in (50, 75, 90, 100):
+        data = _jpeg(np.zeros((16, 16, 3), np.uint8), quality=q)
+        table = np.asarray(Image.open(io.BytesIO(data)).quantization[0], dtype=float).reshape(8, 8)
+        assert ijg_quality(table) == q
+    assert ijg_quality(None) is None
