@@ -50,7 +50,7 @@ def test_per_condition_breakdown(run):
     assert rows[("kind", "faint")].tpr.value == 0 and rows[("kind", "faint")].authentic_pool == "all"
     assert rows[("kind", "bright")].tpr.value == 1
     assert rows[("size", "small")].authentic_pool == "same"
-    assert rows[("source", "squares")].n_spliced == 12
+    assert rows[("generator", "squares")].n_spliced == 12
 
 
 def test_record_round_trips_and_is_reproducible(run, tmp_path):
