@@ -1,0 +1,277 @@
+"""The CFA detector: from a photo's stored grid to a typed result.
+
+Stages: residual features per block (:mod:`.residuals`), the blocks' votes
+for the image's mosaic phase (:mod:`.votes`), the global test and the
+pattern's name (:mod:`.naming`), and the a-contrario region scan
+(:mod:`.regions`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from forensics_core import DetectorResult, DetectorSpec, Status
+
+from . import naming
+from .bayer import shifted
+from .regions import KINDS, Question, Region, count_tests, detectable_side, scan
+from .residuals import block_features
+from .significance import clopper_pearson, log10_binom_tail
+from .votes import SHIFTS, phase_votes
+
+NAME = "cfa"
+VERSION = "1.0.0"
+
+REFERENCES = (
+    "A. C. Popescu, H. Farid, Exposing digital forgeries in color filter array interpolated images, "
+    "IEEE Transactions on Signal Processing 53(10), 3948-3959, 2005.",
+    "M. Kirchner, Efficient estimation of CFA pattern configuration in digital camera images, "
+    "Proc. SPIE 7541, Media Forensics and Security II, 754111, 2010.",
+    "Q. Bammey, R. Grompone von Gioi, J.-M. Morel, An adaptive neural network for unsupervised mosaic "
+    "consistency analysis in image forensics, CVPR 2020, 14194-14204.",
+    "Q. Bammey, R. Grompone von Gioi, J.-M. Morel, Demosaicing to detect demosaicing and image forgeries, "
+    "IEEE WIFS 2022.",
+    "A. Desolneux, L. Moisan, J.-M. Morel, From Gestalt Theory to Image Analysis: A Probabilistic Approach, "
+    "Springer, 2008 (a-contrario detection, number of false alarms).",
+    "J. F. Hamilton Jr., J. E. Adams Jr., Adaptive color plan interpolation in single sensor color electronic "
+    "camera, US Patent 5,629,734, 1997 (the edge-aware demosaicing of the validation).",
+    "O. Ledoit, M. Wolf, A well-conditioned estimator for large-dimensional covariance matrices, "
+    "Journal of Multivariate Analysis 88(2), 365-411, 2004.",
+)
+
+DEFAULT_PARAMS: dict[str, Any] = {
+    "block_px": 16,
+    "log_offset": 0.05,
+    "max_clipped_fraction": 0.5,
+    "min_activity": 0.2,
+    "shrinkage": 0.05,
+    "colour_ridge": 0.01,
+    "min_usable_blocks": 64,
+    "trace_alpha": 1e-3,
+    "nfa_threshold": 0.01,
+    "max_detectable_fraction": 0.10,
+}
+
+SPEC = DetectorSpec(
+    name=NAME,
+    version=VERSION,
+    description="Finds regions whose demosaicing (colour filter array) phase disagrees with the rest of the photo.",
+    references=REFERENCES,
+    default_params=DEFAULT_PARAMS,
+)
+
+
+class _Timer:
+    def __init__(self) -> None:
+        self.marks: dict[str, float] = {}
+        self._t = time.perf_counter()
+
+    def lap(self, stage: str) -> None:
+        now = time.perf_counter()
+        self.marks[stage] = round(now - self._t, 4)
+        self._t = now
+
+
+def _inconclusive(reason: str, details: dict[str, Any]) -> DetectorResult:
+    details["reason"] = reason
+    return DetectorResult(Status.INCONCLUSIVE, f"Inconclusive: {reason}.", details=details)
+
+
+def _colour_grid(pixels: np.ndarray) -> tuple[np.ndarray | None, float, str | None]:
+    """The RGB channels of the stored grid and their full-scale value, or the reason there are none."""
+    px = np.asarray(pixels)
+    if px.ndim != 3 or px.shape[2] < 3:
+        return None, 0.0, "the photo has no colour channels (greyscale), so it carries no colour-filter-array trace"
+    rgb = px[..., :3]
+    if px.dtype == np.uint8:
+        full = 255.0
+    elif px.dtype in (np.uint16, np.int32):
+        full = 65535.0
+    elif px.dtype.kind == "f":
+        if not np.isfinite(rgb).all():
+            return None, 0.0, "the pixel values are not all finite"
+        # Float grids are taken as they are: [0, 1] unless they say otherwise.
+        full = max(1.0, float(rgb.max(initial=0.0)))
+    else:
+        return None, 0.0, f"pixel type {px.dtype} is not supported"
+    if np.array_equal(rgb[..., 0], rgb[..., 1]) and np.array_equal(rgb[..., 1], rgb[..., 2]):
+        return None, 0.0, "the three colour channels are identical (a greyscale picture stored as colour)"
+    return rgb, full, None
+
+
+def _rate(k: int, n: int) -> dict[str, Any]:
+    lo, hi = clopper_pearson(k, n)
+    return {"agree": k, "votes": n, "rate": (k / n) if n else None, "ci95": [lo, hi] if n else None,
+            "log10_p": float(log10_binom_tail(np.array([k]), np.array([n]), 0.5)[0]) if n else 0.0}
+
+
+def _power(grid: tuple[int, int], rate: float | None, vote_rate: float, n_tests: int, eps: float) -> dict[str, Any]:
+    side = detectable_side(grid, rate, vote_rate, n_tests, eps) if rate and rate > 0.5 else None
+    return {"side_blocks": side,
+            "fraction": None if side is None else side * side / (grid[0] * grid[1])}
+
+
+def _region_record(region: Region, block: int, shape: tuple[int, int], index: int) -> dict[str, Any]:
+    rows, cols = np.nonzero(region.blocks)
+    y0, x0, h, w = region.window
+    return {
+        "id": index,
+        "kind": region.kind,
+        "log10_nfa": round(region.log10_nfa, 3),
+        "nfa": float(10.0 ** region.log10_nfa),
+        "n_blocks": int(len(rows)),
+        "area_fraction": len(rows) * block * block / (shape[0] * shape[1]),
+        "bbox_px": [int(cols.min() * block), int(rows.min() * block),
+                    int((cols.max() + 1) * block), int((rows.max() + 1) * block)],
+        "window_px": [x0 * block, y0 * block, (x0 + w) * block, (y0 + h) * block],
+        "votes_against": region.votes_against,
+        "votes": region.votes,
+        "blocks": np.stack([rows, cols], axis=1).tolist(),
+    }
+
+
+def regions_mask(details: Mapping[str, Any], shape: tuple[int, int]) -> np.ndarray:
+    """Boolean ``(H, W)`` map of the blocks of every flagged region (all False when none)."""
+    mask = np.zeros(shape, dtype=bool)
+    block = int(details.get("block_px", 0) or 0)
+    for region in details.get("regions") or []:
+        for row, col in region["blocks"]:
+            mask[row * block:(row + 1) * block, col * block:(col + 1) * block] = True
+    return mask
+
+
+def analyse(pixels: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
+    """Run the detector on a photo's stored grid.
+
+    Parameters
+    ----------
+    pixels : ndarray, shape (H, W) or (H, W, C)
+        The evidence's stored grid (read only).
+    params : mapping
+        :data:`DEFAULT_PARAMS` with the user's overrides.
+
+    Returns
+    -------
+    DetectorResult
+        ``ok`` with the NFA of the most significant region (or of the most
+        significant window when no region is flagged) and ``score = 1 -
+        min(1, NFA)``; ``inconclusive`` when the photo has no colour, is too
+        small, or carries too weak a demosaicing trace.
+    """
+    timer = _Timer()
+    block = int(params["block_px"])
+    eps = float(params["nfa_threshold"])
+    details: dict[str, Any] = {
+        "image_shape": list(np.shape(pixels)[:2]),
+        "block_px": block,
+        "thresholds": {"trace_alpha": float(params["trace_alpha"]), "nfa_threshold": eps,
+                       "max_detectable_fraction": float(params["max_detectable_fraction"])},
+    }
+    rgb, full, reason = _colour_grid(pixels)
+    if rgb is None:
+        return _inconclusive(reason, details)
+    h, w = rgb.shape[:2]
+    ny, nx = h // block, w // block
+    if ny < 8 or nx < 8:
+        return _inconclusive(f"the photo ({w} x {h} pixels) is too small: at least 8 x 8 blocks of {block} pixels "
+                             "are needed", details)
+
+    feats = block_features(rgb, block, full, float(params["log_offset"]))
+    timer.lap("residuals")
+    usable = ((feats.clipped <= float(params["max_clipped_fraction"]))
+              & (feats.activity >= float(params["min_activity"])))
+    details.update({"grid": [ny, nx], "n_usable": int(usable.sum()), "usable_fraction": float(usable.mean())})
+    if usable.sum() < int(params["min_usable_blocks"]):
+        return _inconclusive(f"only {int(usable.sum())} blocks have unclipped texture (at least "
+                             f"{int(params['min_usable_blocks'])} needed)", details)
+
+    try:
+        votes = phase_votes(feats.features, feats.colour, usable, float(params["shrinkage"]),
+                            float(params["colour_ridge"]))
+    except ValueError as exc:
+        return _inconclusive(f"the signature of the mosaic cannot be learnt: {exc}", details)
+    timer.lap("votes")
+    diag_voting = usable & (votes.t_diag != 0)
+    rb_voting = usable & (votes.t_diag > 0) & (votes.t_rb != 0)
+    diag = _rate(int((votes.t_diag > 0).sum()), int(diag_voting.sum()))
+    rb = _rate(int((rb_voting & (votes.t_rb > 0)).sum()), int(rb_voting.sum()))
+    n_tests = len(KINDS) * count_tests(ny, nx)
+    details.update({
+        "features": [f"{source} {kind}" for source, kind in feats.names],
+        "signature": np.round(votes.signature, 4),
+        "diagonal": diag,
+        "red_blue": rb,
+        "shift_votes": votes.shift_vote.astype(int),
+        "shifts": [list(s) for s in SHIFTS],
+        "n_tests": n_tests,
+    })
+    trace = diag["log10_p"] <= np.log10(float(params["trace_alpha"]))
+    details["trace_present"] = bool(trace)
+    if not trace:
+        timer.lap("scan")
+        details["elapsed_s"] = timer.marks
+        return _inconclusive("no demosaicing trace: the blocks do not agree on a mosaic phase better than chance "
+                             f"({diag['agree']} of {diag['votes']} votes, p = {10 ** diag['log10_p']:.2g}); strong "
+                             "compression, resizing or a non-Bayer camera erase it", details)
+
+    name = naming.name_pattern(rgb, votes, block, full)
+    timer.lap("naming")
+    details["pattern"] = name
+
+    result = scan([Question("diagonal", votes.t_diag < 0, diag_voting),
+                   Question("red_blue", votes.t_rb < 0, rb_voting)], eps)
+    timer.lap("scan")
+    vote_rate = diag["votes"] / (ny * nx)
+    details["power"] = {
+        "diagonal": _power((ny, nx), diag["rate"], vote_rate, n_tests, eps),
+        "red_blue": _power((ny, nx), rb["rate"], rb["votes"] / (ny * nx), n_tests, eps),
+    }
+    regions = [_region_record(r, block, (h, w), i + 1) for i, r in enumerate(result.regions)]
+    if name["pattern"]:
+        for rec, r in zip(regions, result.regions):
+            sv = votes.shift_vote[r.blocks]
+            counts = np.bincount(sv[sv >= 0], minlength=4)
+            counts[0] = 0
+            rec["pattern"] = shifted(name["pattern"], *SHIFTS[int(np.argmax(counts))])
+    details["regions"] = regions
+    details["min_log10_nfa"] = round(result.min_log10_nfa, 3)
+    details["elapsed_s"] = timer.marks
+
+    nfa = regions[0]["nfa"] if regions else float(10.0 ** result.min_log10_nfa)
+    fraction = details["power"]["diagonal"]["fraction"]
+    if not regions and (fraction is None or fraction > float(params["max_detectable_fraction"])):
+        limit = "the whole photo" if fraction is None else f"{100 * fraction:.0f}% of the photo"
+        return _inconclusive(f"the demosaicing trace is too weak to localise a pasted region smaller than {limit} "
+                             f"(blocks agree with the photo's phase at a rate of {diag['rate']:.2f})", details)
+    return DetectorResult(
+        status=Status.OK,
+        summary=_summary(details, regions, nfa),
+        score=1.0 - min(1.0, nfa),
+        nfa=nfa,
+        details=details,
+    )
+
+
+def _nfa_text(log10_nfa: float) -> str:
+    """An NFA for a sentence; powers of ten below what a float holds."""
+    return f"{10 ** log10_nfa:.2g}" if log10_nfa > -300 else f"10^{log10_nfa:.0f}"
+
+
+def _summary(details: dict[str, Any], regions: list[dict[str, Any]], nfa: float) -> str:
+    pattern = details["pattern"]["pattern"]
+    where = f"a {pattern} Bayer mosaic" if pattern else "a Bayer mosaic (pattern name undetermined)"
+    rate = details["diagonal"]["rate"]
+    if not regions:
+        frac = details["power"]["diagonal"]["fraction"]
+        return (f"The photo carries the trace of {where} in one phase throughout (blocks agree at a rate of "
+                f"{rate:.2f}); no region with another phase was found (smallest NFA {nfa:.2g}; a region of "
+                f"{100 * frac:.1f}% of the photo or more would have been found).")
+    r = regions[0]
+    kind = "green on the other diagonal" if r["kind"] == "diagonal" else "red and blue swapped"
+    more = f" and {len(regions) - 1} more" if len(regions) > 1 else ""
+    return (f"Region 1{more} ({100 * r['area_fraction']:.1f}% of the photo, {kind}) disagrees with the photo's "
+            f"demosaicing phase ({where}), NFA = {_nfa_text(r['log10_nfa'])}.")
