@@ -22,9 +22,9 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from . import ENTRY_POINT_GROUP, __version__
-from .analysis import DEFAULT_TIMEOUT_S, ISOLATIONS, Options, analyze_evidence, resolve_params
-from .evidence import DEFAULT_MAX_PIXELS, EvidenceError, load_evidence
-from .output import output_dir_for, write_findings
+from .analysis import DEFAULT_TIMEOUT_S, ISOLATIONS, Options, resolve_params
+from .evidence import DEFAULT_MAX_PIXELS, EvidenceError
+from .output import ReportError, ReportSettings, examine_photo, output_dir_for
 from .plugins import PluginHost, one_line
 from .report.render import PAPER_SIZES, ReportOptions
 from .signing import (
@@ -40,6 +40,7 @@ from .signing import (
     load_key,
     write_key_files,
 )
+from .validation.command import validate_command
 
 FORMATS = ("json", "html", "pdf")
 REPORT_FORMATS = ("html", "pdf")
@@ -106,10 +107,6 @@ def cli() -> None:
     """
 
 
-class ReportError(Exception):
-    """The report of one photo could not be made; the message is one line."""
-
-
 def _password_from_env() -> bytes | None:
     value = os.environ.get(PASSWORD_ENV)
     return value.encode("utf-8") if value is not None else None
@@ -142,60 +139,50 @@ def _signing_key(key_path: Path | None, examiner: str | None, organisation: str 
     return key
 
 
-def _write_report(findings, evidence, folder: Path, key: ExaminerKey, host: PluginHost, formats: list[str],
-                  options, organisation: str | None, tsa_url: str | None) -> None:
-    from .report.bundle import write_bundle
+def _run_options(command):
+    """The options ``analyze`` and ``batch`` share: what to run, how, and how to report it."""
+    options = [
+        click.option("--detectors", help="Comma-separated detector names (default: all installed)."),
+        click.option("--format", "formats", default=",".join(FORMATS), show_default=True,
+                     help=f"Comma-separated output formats: {', '.join(FORMATS)}. html and pdf also write the signed "
+                          "manifest.json and manifest.json.p7s."),
+        click.option("--case-id", help="Case identifier carried into the findings."),
+        click.option("--examiner", help="Examiner's name carried into the findings."),
+        click.option("--param", "params", multiple=True, metavar="DETECTOR.KEY=VALUE",
+                     help="Override a detector parameter (repeatable); VALUE is read as JSON if it parses."),
+        click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=DEFAULT_TIMEOUT_S,
+                     show_default=True, help="Time limit per detector, seconds."),
+        click.option("--max-pixels", type=click.IntRange(min=1), default=DEFAULT_MAX_PIXELS, show_default=True,
+                     help="Refuse images with more pixels (decompression bombs)."),
+        click.option("--fusion", default="bonferroni", show_default=True, help="Fusion policy for the verdict."),
+        click.option("--isolation", type=click.Choice(ISOLATIONS), default="process", show_default=True,
+                     help="Run each detector in a child process (killable at the time limit) or inline."),
+        click.option("--exhibit-id", help="Exhibit identifier printed on every page of the report."),
+        click.option("--organisation",
+                     help="Examiner's organisation for the signature block (default: the certificate's)."),
+        click.option("--key", "key_path", type=click.Path(dir_okay=False, exists=True, path_type=Path),
+                     help=f"Signing key, PKCS#12 (password from ${PASSWORD_ENV} or a prompt). Default: the per-user "
+                          "self-signed key, made on first use."),
+        click.option("--paper", type=click.Choice(sorted(PAPER_SIZES)), default="a4", show_default=True,
+                     help="PDF paper size."),
+        click.option("--tsa", "tsa_url", metavar="URL",
+                     help="RFC 3161 time-stamping service for the signatures (default: none)."),
+        click.option("--validation", "validation_path", type=click.Path(dir_okay=False, exists=True, path_type=Path),
+                     help="validation.json whose error rates the report states (default: the record shipped with "
+                          "this release)."),
+    ]
+    for option in reversed(options):
+        command = option(command)
+    return command
 
-    try:
-        result = write_bundle(findings, evidence, folder, key, formats=formats, host=host, options=options,
-                              organisation=organisation, tsa_url=tsa_url)
-    except OSError:
-        raise  # reported by the caller as "cannot write output", like findings.json
-    except Exception as exc:  # rendering or signing failed for this photo; the others go on
-        if os.environ.get("FORENSICS_DEBUG"):
-            raise
-        raise ReportError(one_line(exc)) from None
-    for url in result.refused_urls:
-        _fail_line(str(folder), f"the PDF renderer was refused {url[:100]!r} (only data: URLs are allowed)")
 
+def _prepare_run(host: PluginHost, detectors, formats, params, timeout, max_pixels, fusion, isolation, case_id,
+                 examiner, exhibit_id, organisation, key_path, paper, tsa_url,
+                 validation_path) -> tuple[Options, ReportSettings | None]:
+    """Check the shared options, load the signing key and warn of unknown detectors.
 
-@cli.command()
-@click.argument("photos", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
-              help="Output folder; each photo gets OUT/<photo stem>/.")
-@click.option("--detectors", help="Comma-separated detector names (default: all installed).")
-@click.option("--format", "formats", default=",".join(FORMATS), show_default=True,
-              help=f"Comma-separated output formats: {', '.join(FORMATS)}. html and pdf also write the signed "
-                   "manifest.json and manifest.json.p7s.")
-@click.option("--case-id", help="Case identifier carried into the findings.")
-@click.option("--examiner", help="Examiner's name carried into the findings.")
-@click.option("--param", "params", multiple=True, metavar="DETECTOR.KEY=VALUE",
-              help="Override a detector parameter (repeatable); VALUE is read as JSON if it parses.")
-@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=DEFAULT_TIMEOUT_S, show_default=True,
-              help="Time limit per detector, seconds.")
-@click.option("--max-pixels", type=click.IntRange(min=1), default=DEFAULT_MAX_PIXELS, show_default=True,
-              help="Refuse images with more pixels (decompression bombs).")
-@click.option("--fusion", default="bonferroni", show_default=True, help="Fusion policy for the verdict.")
-@click.option("--isolation", type=click.Choice(ISOLATIONS), default="process", show_default=True,
-              help="Run each detector in a child process (killable at the time limit) or inline.")
-@click.option("--exhibit-id", help="Exhibit identifier printed on every page of the report.")
-@click.option("--organisation", help="Examiner's organisation for the signature block (default: the certificate's).")
-@click.option("--key", "key_path", type=click.Path(dir_okay=False, exists=True, path_type=Path),
-              help=f"Signing key, PKCS#12 (password from ${PASSWORD_ENV} or a prompt). Default: the per-user "
-                   "self-signed key, made on first use.")
-@click.option("--paper", type=click.Choice(sorted(PAPER_SIZES)), default="a4", show_default=True, help="PDF paper size.")
-@click.option("--tsa", "tsa_url", metavar="URL", help="RFC 3161 time-stamping service for the signatures (default: none).")
-@click.pass_context
-def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params, timeout, max_pixels, fusion, isolation,
-            exhibit_id, organisation, key_path, paper, tsa_url):
-    """Analyse PHOTO... and write OUT/<photo stem>/findings.json for each,
-    with the signed report (report.html, report.pdf, manifest.json and its
-    signature) beside it.
-
-    Exits 0 when every photo was analysed, whatever the verdict; 1 when some
-    photo could not be taken in or its outputs could not be written.
+    Raises ``click.BadParameter`` (exit status 2) for wrong usage.
     """
-    host: PluginHost = ctx.find_root().command.host
     wanted_formats = _split_list(formats) or []
     bad = sorted(set(wanted_formats) - set(FORMATS))
     if bad:
@@ -210,12 +197,47 @@ def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params,
         resolve_params(host, options)
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="--param") from None
-    report_formats = [f for f in REPORT_FORMATS if f in wanted_formats]
-    key = _signing_key(key_path, examiner, organisation) if report_formats else None
+    report_formats = tuple(f for f in REPORT_FORMATS if f in wanted_formats)
+    report = None
+    if report_formats:
+        record = None
+        if validation_path is not None:
+            from .validation import read_record
+
+            try:
+                record = read_record(validation_path)
+            except (OSError, ValueError) as exc:
+                raise click.BadParameter(one_line(exc), param_hint="--validation") from None
+        report = ReportSettings(_signing_key(key_path, examiner, organisation), report_formats,
+                                ReportOptions(exhibit_id=exhibit_id, paper=paper, validation=record,
+                                              validation_source=str(validation_path) if record else None),
+                                organisation, tsa_url)
     for name in options.detectors or []:
         if name not in host.detectors:
             _fail_line(f"detector {name}", "not available; it is recorded as an error in the findings "
                                             f"(available: {', '.join(sorted(host.detectors)) or 'none'})")
+    return options, report
+
+
+@cli.command()
+@click.argument("photos", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
+              help="Output folder; each photo gets OUT/<photo stem>/.")
+@_run_options
+@click.pass_context
+def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params, timeout, max_pixels, fusion, isolation,
+            exhibit_id, organisation, key_path, paper, tsa_url, validation_path):
+    """Analyse PHOTO... and write OUT/<photo stem>/findings.json for each,
+    with the signed report (report.html, report.pdf, manifest.json and its
+    signature) beside it.
+
+    Exits 0 when every photo was analysed, whatever the verdict; 1 when some
+    photo could not be taken in or its outputs could not be written.
+    """
+    host: PluginHost = ctx.find_root().command.host
+    options, report = _prepare_run(host, detectors, formats, params, timeout, max_pixels, fusion, isolation, case_id,
+                                   examiner, exhibit_id, organisation, key_path, paper, tsa_url,
+                                   validation_path)
 
     failures = 0
     used: set[str] = set()
@@ -227,13 +249,8 @@ def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params,
             progress.update(task, description=escape(f"analysing {photo.name}"))
             progress.refresh()
             try:
-                evidence = load_evidence(photo, max_pixels=max_pixels)
-                findings = analyze_evidence(evidence, host, options)
-                target = output_dir_for(out_dir, photo, evidence.info.sha256, used)
-                path = write_findings(findings, target)
-                if key is not None:
-                    _write_report(findings, evidence, target, key, host, report_formats,
-                                  ReportOptions(exhibit_id=exhibit_id, paper=paper), organisation, tsa_url)
+                done = examine_photo(photo, lambda ev: output_dir_for(out_dir, photo, ev.info.sha256, used),
+                                     host, options, report)
             except EvidenceError as exc:
                 failures += 1
                 _fail_line(str(photo), str(exc))
@@ -244,12 +261,65 @@ def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params,
                 failures += 1
                 _fail_line(str(photo), f"cannot write the report: {exc}")
             else:
-                v = findings.verdict
-                click.echo(f"{photo}: {v.label.value} -> {path}")
+                for url in done.refused_urls:
+                    _fail_line(str(done.folder), f"the PDF renderer was refused {url[:100]!r} (only data: URLs are allowed)")
+                click.echo(f"{photo}: {done.findings.verdict.label.value} -> {done.findings_path}")
             progress.advance(task)
             progress.refresh()
     if failures:
         ctx.exit(1)
+
+
+@cli.command("batch")
+@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...", type=click.Path(path_type=Path))
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
+              help="Output folder; each photo gets OUT/<photo stem>/, plus OUT/summary.csv and OUT/summary.json.")
+@click.option("--workers", type=click.IntRange(min=1),
+              help="Local worker processes (default: the number of usable CPU cores).")
+@click.option("--scheduler", metavar="tcp://HOST:PORT",
+              help="Run on this Dask distributed cluster instead; its workers must see the inputs, OUT and the "
+                   "signing key under the same paths.")
+@click.option("--recursive", is_flag=True, help="Take photos from all descendants of folders, not only children.")
+@click.option("--force", is_flag=True, help="Analyse again photos whose outputs are already finished.")
+@_run_options
+@click.pass_context
+def batch_command(ctx, inputs, out_dir, workers, scheduler, recursive, force, detectors, formats, case_id, examiner,
+                  params, timeout, max_pixels, fusion, isolation, exhibit_id, organisation, key_path, paper, tsa_url,
+                  validation_path):
+    """Analyse every photo under INPUT... (files and folders) as `analyze`
+    does, on local worker processes or a Dask cluster, with a progress bar and
+    OUT/summary.csv and OUT/summary.json at the end.
+
+    A rerun keeps photos whose outputs are finished (same bytes, same
+    settings) and redoes the rest; photos with the same bytes are analysed
+    once. Exits 0 when every photo was analysed, whatever the verdict; 1 when
+    some failed.
+    """
+    from .batch import BatchError, BatchRequest, Settings, print_summary, run_batch
+
+    if workers is not None and scheduler is not None:
+        raise click.BadParameter("local workers and --scheduler exclude each other", param_hint="--workers")
+    host: PluginHost = ctx.find_root().command.host
+    options, report = _prepare_run(host, detectors, formats, params, timeout, max_pixels, fusion, isolation, case_id,
+                                   examiner, exhibit_id, organisation, key_path, paper, tsa_url,
+                                   validation_path)
+    settings = Settings(options)
+    if report is not None:
+        settings = Settings(options, report.formats, report.options, report.organisation, report.tsa_url,
+                            key_path=str(Path(report.key.source).resolve()), key_fingerprint=report.key.fingerprint)
+    request = BatchRequest(list(inputs), out_dir, settings, recursive=recursive, workers=workers, scheduler=scheduler,
+                           force=force)
+    try:
+        result = run_batch(request, host, report.key if report else None, err_console, _fail_line)
+    except BatchError as exc:
+        _fail_line("batch", str(exc))
+        ctx.exit(1)
+    print_summary(result, Console(highlight=False))
+    if result.failed:
+        ctx.exit(1)
+
+
+cli.add_command(validate_command)
 
 
 @cli.command("plugins")

@@ -1,0 +1,46 @@
+"""Test-only plugins for the batch tests, found through the entry points of the
+``batch_fixtures`` distribution beside this file (put this folder on PYTHONPATH).
+
+``steady``: a detector that takes ``seconds`` and reports the mean luma.
+``killer``: kills the process that analyses a photo whose name contains
+``$BATCH_TEST_KILL`` (its metadata hook runs in the worker itself, not in a
+detector child), after noting the attempt in ``$BATCH_TEST_LOG``.
+"""
+
+import os
+import signal
+import time
+
+from forensics_core import DetectorResult, DetectorSpec, Status, hookimpl
+
+
+class Steady:
+    @hookimpl
+    def forensics_register_detectors(self):
+        return [DetectorSpec("steady", "1.0.0", "Test detector: mean luma after a fixed delay.",
+                             default_params={"seconds": 0.0})]
+
+    @hookimpl
+    def forensics_analyze(self, detector, evidence, params):
+        if detector != "steady":
+            return None
+        time.sleep(float(params["seconds"]))
+        mean = float(evidence.luma.mean())
+        return DetectorResult(Status.OK, f"Mean luma {mean:.3f}.", score=mean, p_value=0.5,
+                              details={"mean_luma": mean})
+
+
+class Killer:
+    @hookimpl
+    def forensics_extract_metadata(self, evidence):
+        target = os.environ.get("BATCH_TEST_KILL")
+        log = os.environ.get("BATCH_TEST_LOG")
+        if log:
+            with open(log, "a") as fh:
+                fh.write(f"{evidence.info.name} {os.getpid()}\n")
+        if target and target in evidence.info.name:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return None
+
+
+steady, killer = Steady(), Killer()

@@ -1,0 +1,49 @@
+"""Finding and hashing the photos of a batch."""
+
+import hashlib
+import os
+
+from forensics_core.batch.inputs import discover, hash_all, sha256_of
+
+
+def _tree(root):
+    for rel in ("a.jpg", "z.txt", ".hidden.jpg", "sub/b.jpg", "sub/.c.jpg", ".git/d.jpg", "out/report.png"):
+        path = root / rel
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(rel.encode())
+
+
+def test_folders_give_their_children_or_with_recursive_all_descendants(tmp_path):
+    root = tmp_path / "in"
+    _tree(root)
+    out = root / "out"
+    assert [p for p, _ in discover([root], out)] == [root / "a.jpg", root / "z.txt"]
+    found = [p.relative_to(root).as_posix() for p, _ in discover([root], out, recursive=True)]
+    # Hidden files and folders and the output folder (a rerun's own reports) are left out.
+    assert found == ["a.jpg", "z.txt", "sub/b.jpg"]
+    inner = tmp_path / "o" / "photos"  # e.g. `batch photos --out .`: the photos are still read
+    inner.mkdir(parents=True)
+    (inner / "p.jpg").write_bytes(b"p")
+    assert [p for p, _ in discover([inner], tmp_path / "o")] == [inner / "p.jpg"]
+
+
+def test_named_files_are_taken_as_given_once_each_and_missing_ones_carry_a_reason(tmp_path):
+    root = tmp_path / "in"
+    _tree(root)
+    found = discover([root / ".hidden.jpg", root, root / "a.jpg", tmp_path / "nope.jpg"], tmp_path / "out")
+    assert found == [(root / ".hidden.jpg", None), (root / "a.jpg", None), (root / "z.txt", None),
+                     (tmp_path / "nope.jpg", "no such file or folder")]
+
+
+def test_hashes_match_hashlib_and_unreadable_inputs_say_why(tmp_path):
+    photo = tmp_path / "p.jpg"
+    photo.write_bytes(b"\xff\xd8" + bytes(range(256)) * 5000)
+    assert sha256_of(photo).sha256 == hashlib.sha256(photo.read_bytes()).hexdigest()
+    assert sha256_of(tmp_path).error == "is a directory, not a photo"
+    assert sha256_of(tmp_path / "missing").error == "no such file"
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    assert sha256_of(fifo).error == "is not a regular file"  # reading it would block for ever
+    photos = list(hash_all([(photo, None), (tmp_path / "x", "no such file or folder")]))
+    assert [p.path for p in photos] == [photo, tmp_path / "x"]
+    assert photos[1].error == "no such file or folder" and photos[1].sha256 is None
