@@ -210,7 +210,7 @@ def _prepare_run(host: PluginHost, detectors, formats, params, timeout, max_pixe
                 raise click.BadParameter(one_line(exc), param_hint="--validation") from None
         report = ReportSettings(_signing_key(key_path, examiner, organisation), report_formats,
                                 ReportOptions(exhibit_id=exhibit_id, paper=paper, validation=record,
-                                              validation_source=str(validation_path) if record else None),
+                                              validation_source=f"the validation record {validation_path}" if record else None),
                                 organisation, tsa_url)
     for name in options.detectors or []:
         if name not in host.detectors:

@@ -249,12 +249,12 @@ def _summary(findings: Findings) -> dict[str, Any]:
 
 def _error_rates(findings: Findings, options: ReportOptions) -> ErrorRates:
     if options.validation is not None:
-        return error_rates(findings, options.validation, options.validation_source or "given by the examiner")
+        return error_rates(findings, options.validation, options.validation_source or "a validation record given by the examiner")
     try:
         shipped = shipped_record()
     except (OSError, ValueError, KeyError, TypeError) as exc:
         return ErrorRates(f"the record shipped with this release could not be read ({exc})", None)
-    return error_rates(findings, shipped, f"the record shipped with forensics {findings.tool.version}")
+    return error_rates(findings, shipped, f"the validation record shipped with forensics {findings.tool.version}")
 
 
 def _stylesheet(paper: str) -> str:
