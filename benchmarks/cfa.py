@@ -20,20 +20,14 @@ Target (issue 5): detector <= 3 s on a 2-core machine.
 from __future__ import annotations
 
 import argparse
-import json
-import statistics
-import subprocess
-import sys
 from pathlib import Path
+
+from harness import fresh_runs, parse_size, print_stages
 
 OUT = Path(__file__).resolve().parent / "out"
 BAND_ROWS = 750
 
 _CHILD = r"""
-import json, re, sys, time
-def hwm_mb():
-    status = open("/proc/self/status").read()
-    return int(re.search(r"VmHWM:\s+(\d+) kB", status).group(1)) / 1024
 import forensics_core
 from forensics_core.evidence import load_evidence
 from forensics_plugins.cfa.detector import DEFAULT_PARAMS, analyse
@@ -88,22 +82,13 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--size", default="4000x3000")
     args = parser.parse_args()
-    size = tuple(int(v) for v in args.size.lower().split("x"))
+    size = parse_size(args.size)
     for kind, target in photos(size).items():
-        runs = []
-        for _ in range(args.runs):
-            out = subprocess.run([sys.executable, "-c", _CHILD, str(target)], capture_output=True, text=True,
-                                 check=True)
-            runs.append(json.loads(out.stdout))
+        runs = fresh_runs(_CHILD, target, args.runs)
         print(f"cfa on the {kind} {target.name} ({size[0]}x{size[1]}), {args.runs} runs, status "
               f"{runs[0]['status']}, {runs[0]['regions']} regions")
-        print(f"{'stage':<22}{'median s':>10}{'min s':>10}{'max s':>10}")
-        for stage in runs[0]["stages"]:
-            values = [r["stages"][stage] for r in runs]
-            print(f"{stage:<22}{statistics.median(values):>10.3f}{min(values):>10.3f}{max(values):>10.3f}")
-        peaks = [r["peak_mb"] for r in runs]
-        print(f"{'peak RSS MB':<22}{statistics.median(peaks):>10.0f}{min(peaks):>10.0f}{max(peaks):>10.0f}")
-        print(f"{'baseline RSS MB':<22}{statistics.median(r['baseline_mb'] for r in runs):>10.0f}\n")
+        print_stages(runs)
+        print()
 
 
 if __name__ == "__main__":

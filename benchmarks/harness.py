@@ -1,0 +1,50 @@
+"""What the per-detector benchmarks share: a fresh process per run, peak memory, the stage table.
+
+Each benchmark's child program starts with :data:`CHILD_PRELUDE` (imports and
+``hwm_mb()``, the process's peak resident memory from ``VmHWM``) and prints one
+JSON object with ``stages`` (seconds by stage), ``peak_mb`` and
+``baseline_mb``.
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+CHILD_PRELUDE = r"""
+import json, re, sys, time
+def hwm_mb():
+    status = open("/proc/self/status").read()
+    return int(re.search(r"VmHWM:\s+(\d+) kB", status).group(1)) / 1024
+"""
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """``"4000x3000"`` as ``(4000, 3000)``."""
+    w, h = (int(v) for v in text.lower().split("x"))
+    return w, h
+
+
+def fresh_runs(child: str, target: Path, runs: int) -> list[dict[str, Any]]:
+    """Run ``child`` on ``target`` ``runs`` times, each in a new interpreter, so no run inherits imports or memory."""
+    out = []
+    for _ in range(runs):
+        done = subprocess.run([sys.executable, "-c", CHILD_PRELUDE + child, str(target)], capture_output=True,
+                              text=True, check=True)
+        out.append(json.loads(done.stdout))
+    return out
+
+
+def print_stages(runs: list[dict[str, Any]]) -> None:
+    """Median, min and max of each stage and of the peak memory over ``runs``."""
+    print(f"{'stage':<22}{'median s':>10}{'min s':>10}{'max s':>10}")
+    for stage in runs[0]["stages"]:
+        values = [r["stages"][stage] for r in runs]
+        print(f"{stage:<22}{statistics.median(values):>10.3f}{min(values):>10.3f}{max(values):>10.3f}")
+    peaks = [r["peak_mb"] for r in runs]
+    print(f"{'peak RSS MB':<22}{statistics.median(peaks):>10.0f}{min(peaks):>10.0f}{max(peaks):>10.0f}")
+    print(f"{'baseline RSS MB':<22}{statistics.median(r['baseline_mb'] for r in runs):>10.0f}")
