@@ -2,8 +2,10 @@
 
 Stages: residual features per block (:mod:`.residuals`), the blocks' votes
 for the image's mosaic phase (:mod:`.votes`), the global test and the
-pattern's name (:mod:`.naming`), and the a-contrario region scan
-(:mod:`.regions`).
+pattern's name (:mod:`.naming`), the content-matched null rates
+(:mod:`.content_null`) and the a-contrario region scan (:mod:`.regions`),
+which asks a region to disagree more than blocks of its colour do elsewhere
+and the photo's own phase to be shown around it.
 """
 
 from __future__ import annotations
@@ -18,13 +20,14 @@ from forensics_core import DetectorResult, DetectorSpec, Status
 
 from . import naming
 from .bayer import shifted
+from .content_null import null_rates
 from .regions import KINDS, Question, Region, count_tests, detectable_side, scan
 from .residuals import block_features
 from .significance import clopper_pearson, log10_binom_tail
 from .votes import SHIFTS, phase_votes
 
 NAME = "cfa"
-VERSION = "1.0.0"
+VERSION = "1.1.0"
 
 REFERENCES = (
     "A. C. Popescu, H. Farid, Exposing digital forgeries in color filter array interpolated images, "
@@ -41,6 +44,10 @@ REFERENCES = (
     "camera, US Patent 5,629,734, 1997 (the edge-aware demosaicing of the validation).",
     "O. Ledoit, M. Wolf, A well-conditioned estimator for large-dimensional covariance matrices, "
     "Journal of Multivariate Analysis 88(2), 365-411, 2004.",
+    "W. Hoeffding, On the distribution of the number of successes in independent trials, "
+    "Annals of Mathematical Statistics 27(3), 713-721, 1956.",
+    "R. Ramanath, W. E. Snyder, Y. Yoo, M. S. Drew, Color image processing pipeline, "
+    "IEEE Signal Processing Magazine 22(1), 34-43, 2005.",
 )
 
 DEFAULT_PARAMS: dict[str, Any] = {
@@ -130,6 +137,9 @@ def _region_record(region: Region, block: int, shape: tuple[int, int], index: in
         "window_px": [x0 * block, y0 * block, (x0 + w) * block, (y0 + h) * block],
         "votes_against": region.votes_against,
         "votes": region.votes,
+        "null_rate": round(region.null_rate, 4),
+        "ring_agree": region.ring_agree,
+        "ring_votes": region.ring_votes,
         "blocks": np.stack([rows, cols], axis=1).tolist(),
     }
 
@@ -160,7 +170,11 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
         ``ok`` with the NFA of the most significant region (or of the most
         significant window when no region is flagged) and ``score = 1 -
         min(1, NFA)``; ``inconclusive`` when the photo has no colour, is too
-        small, or carries too weak a demosaicing trace.
+        small, or carries too weak a demosaicing trace: outside any region
+        found, its blocks must agree with its phase well enough that a paste
+        of :data:`DEFAULT_PARAMS` ``max_detectable_fraction`` of the photo
+        would be flagged. Regions found in a photo that fails this are listed
+        in ``details["regions_set_aside"]``, not flagged.
     """
     timer = _Timer()
     block = int(params["block_px"])
@@ -222,8 +236,16 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     timer.lap("naming")
     details["pattern"] = name
 
-    result = scan([Question("diagonal", votes.t_diag < 0, diag_voting),
-                   Question("red_blue", votes.t_rb < 0, rb_voting)], eps)
+    chroma = np.stack([feats.colour, feats.green], axis=2)
+    questions, share = [], {}
+    for kind, disagree, voting in (("diagonal", votes.t_diag < 0, diag_voting),
+                                   ("red_blue", votes.t_rb < 0, rb_voting)):
+        null = null_rates(disagree, voting, chroma)
+        # Reported: how much of the photo is of a colour that votes against as a rule.
+        share[kind] = round(float((null[voting] > 0.5).mean()), 4) if voting.any() else 0.0
+        questions.append(Question(kind, disagree, voting, null))
+    details["colour_against_share"] = share
+    result = scan(questions, eps)
     timer.lap("scan")
     vote_rate = diag["votes"] / (ny * nx)
     details["power"] = {
@@ -241,12 +263,25 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     details["min_log10_nfa"] = round(result.min_log10_nfa, 3)
     details["elapsed_s"] = timer.marks
 
-    nfa = regions[0]["nfa"] if regions else float(10.0 ** result.min_log10_nfa)
-    fraction = details["power"]["diagonal"]["fraction"]
-    if not regions and (fraction is None or fraction > float(params["max_detectable_fraction"])):
+    # The photo's own trace is judged outside the regions, which would dilute it.
+    outside = diag_voting & ~np.any([r.blocks for r in result.regions], axis=0) if regions else diag_voting
+    host = _rate(int((outside & (votes.t_diag > 0)).sum()), int(outside.sum()))
+    fraction = _power((ny, nx), host["rate"], vote_rate, n_tests, eps)["fraction"]
+    details["power"]["diagonal_outside_regions"] = fraction
+    if fraction is None or fraction > float(params["max_detectable_fraction"]):
+        # A paste from a photo like this one would disagree no more than the
+        # photo agrees, so where that is too weak to localise a tenth of the
+        # photo, a region found anyway owes its votes to an area of content
+        # (measured on camera JPEGs), not to another mosaic.
+        details["regions"] = []
+        details["regions_set_aside"] = [{k: v for k, v in r.items() if k != "blocks"} for r in regions]
         limit = "the whole photo" if fraction is None else f"{100 * fraction:.0f}% of the photo"
+        aside = (f"; {len(regions)} area(s) voting against it were set aside, as content at this trace strength "
+                 "cannot be told from another mosaic") if regions else ""
         return _inconclusive(f"the demosaicing trace is too weak to localise a pasted region smaller than {limit} "
-                             f"(blocks agree with the photo's phase at a rate of {diag['rate']:.2f})", details)
+                             f"(blocks agree with the photo's phase at a rate of {host['rate'] or 0:.2f}){aside}",
+                             details)
+    nfa = regions[0]["nfa"] if regions else float(10.0 ** result.min_log10_nfa)
     return DetectorResult(
         status=Status.OK,
         summary=_summary(details, regions, nfa),

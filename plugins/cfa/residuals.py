@@ -55,6 +55,9 @@ class BlockFeatures:
     colour : ndarray of float32, shape (ny, nx)
         Colour balance ``log1p(mean R) - log1p(mean B)`` (8-bit units), which
         a shift of the mosaic does not change.
+    green : ndarray of float32, shape (ny, nx)
+        Green excess ``log1p(mean G) - (log1p(mean R) + log1p(mean B)) / 2``
+        (8-bit units): with ``colour``, the block's chromaticity.
     names : tuple of (str, str)
         The features, as (source, predictor) pairs.
     block_px : int
@@ -65,6 +68,7 @@ class BlockFeatures:
     clipped: np.ndarray
     activity: np.ndarray
     colour: np.ndarray
+    green: np.ndarray
     names: tuple[tuple[str, str], ...]
     block_px: int
 
@@ -90,7 +94,7 @@ def _accumulate(rgb, block, ny, nx, scale, up, down, left, right, sums, counts, 
     of the samples and of the interpolated values unequally, which would bend
     the pattern. Filled in place, in 8-bit units (values times ``scale``):
     ``sums`` (ny, nx, 10, 4) and ``counts`` (ny, nx, 4) of the pixels kept,
-    and ``colour`` (ny, nx, 2) sums of R and B over all pixels.
+    and ``colour`` (ny, nx, 3) sums of R, B and G over all pixels.
     """
     cross = np.empty(3, np.float32)
     diag = np.empty(3, np.float32)
@@ -105,6 +109,7 @@ def _accumulate(rgb, block, ny, nx, scale, up, down, left, right, sums, counts, 
             bx = x // block
             colour[by, bx, 0] += np.float32(rgb[y, x, 0]) * scale
             colour[by, bx, 1] += np.float32(rgb[y, x, 2]) * scale
+            colour[by, bx, 2] += np.float32(rgb[y, x, 1]) * scale
             sat = False
             for c in range(3):
                 v = np.float32(rgb[y, x, c]) * scale
@@ -166,7 +171,7 @@ def block_features(rgb: np.ndarray, block: int, full_scale: float, offset: float
     names = FEATURES
     sums = np.zeros((ny, nx, len(names), 4), dtype=np.float32)
     counts = np.zeros((ny, nx, 4), dtype=np.float32)
-    colour = np.zeros((ny, nx, 2), dtype=np.float32)
+    colour = np.zeros((ny, nx, 3), dtype=np.float32)
     rows, cols = np.arange(h), np.arange(w)
     _accumulate(rgb, block, ny, nx, np.float32(255.0 / full_scale),
                 _mirrored(rows - 1, h), _mirrored(rows + 1, h), _mirrored(cols - 1, w), _mirrored(cols + 1, w),
@@ -180,6 +185,7 @@ def block_features(rgb: np.ndarray, block: int, full_scale: float, offset: float
         clipped=1.0 - counts.min(axis=2) / np.float32(block * block / 4),
         activity=activity,
         colour=balance[:, :, 0] - balance[:, :, 1],
+        green=balance[:, :, 2] - 0.5 * (balance[:, :, 0] + balance[:, :, 1]),
         names=names,
         block_px=block,
     )

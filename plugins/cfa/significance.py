@@ -23,23 +23,24 @@ def _kl(q: np.ndarray, p: float) -> np.ndarray:
     return a + b
 
 
-def log10_chernoff(k: np.ndarray, n: np.ndarray, p: float) -> np.ndarray:
-    """Chernoff-Hoeffding upper bound of ``log10 P(Bin(n, p) >= k)``; 0 where ``k <= n p``."""
+def log10_chernoff(k: np.ndarray, n: np.ndarray, p: float | np.ndarray) -> np.ndarray:
+    """Chernoff-Hoeffding upper bound of ``log10 P(Bin(n, p) >= k)``; 0 where ``k <= n p`` (``p`` broadcasts)."""
     k = np.asarray(k, dtype=np.float64)
     n = np.asarray(n, dtype=np.float64)
     q = np.divide(k, n, out=np.zeros_like(k), where=n > 0)
     return np.where(k > n * p, -n * _kl(q, p) * _LOG10_E, 0.0)
 
 
-def log10_binom_tail(k: np.ndarray, n: np.ndarray, p: float) -> np.ndarray:
+def log10_binom_tail(k: np.ndarray, n: np.ndarray, p: float | np.ndarray) -> np.ndarray:
     """``log10 P(Bin(n, p) >= k)`` for arrays of counts, exact unless it underflows.
 
     Parameters
     ----------
     k, n : array_like of int
         Successes and trials (broadcast together), ``0 <= k <= n``.
-    p : float
-        Success probability under the null hypothesis.
+    p : float or array_like
+        Success probability under the null hypothesis, in (0, 1) (broadcast
+        with ``k`` and ``n``).
 
     Returns
     -------
@@ -48,14 +49,14 @@ def log10_binom_tail(k: np.ndarray, n: np.ndarray, p: float) -> np.ndarray:
     """
     k = np.asarray(k, dtype=np.float64)
     n = np.asarray(n, dtype=np.float64)
-    k, n = np.broadcast_arrays(k, n)
+    k, n, p = np.broadcast_arrays(k, n, np.asarray(p, dtype=np.float64))
     out = np.zeros(k.shape)
     pos = k > 0
     if pos.any():
-        tail = special.betainc(k[pos], n[pos] - k[pos] + 1.0, p)
+        tail = special.betainc(k[pos], n[pos] - k[pos] + 1.0, p[pos])
         with np.errstate(divide="ignore"):
             exact = np.log10(tail)
-        bound = log10_chernoff(k[pos], n[pos], p)
+        bound = log10_chernoff(k[pos], n[pos], p[pos])
         out[pos] = np.where(tail > 1e-290, exact, bound)
     return out
 

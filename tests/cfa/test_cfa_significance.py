@@ -29,3 +29,11 @@ def test_clopper_pearson_covers_the_rate():
     assert lo < 0.8 < hi
     assert clopper_pearson(0, 0) == (None, None)
     assert clopper_pearson(10, 10)[1] == 1.0
+
+
+def test_tail_takes_a_probability_per_count():
+    k = np.array([5, 20, 60])
+    n = np.array([10, 40, 100])
+    p = np.array([0.5, 0.6, 0.75])
+    assert np.allclose(log10_binom_tail(k, n, p), np.log10(stats.binom.sf(k - 1, n, p)), atol=1e-9)
+    assert np.all(log10_chernoff(k, n, p) >= log10_binom_tail(k, n, p) - 1e-12)
