@@ -10,7 +10,9 @@ an examiner makes first, not tests with an error rate.
 
 from __future__ import annotations
 
+import math
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import datetime
 from typing import Literal
@@ -19,6 +21,8 @@ from forensics_core.findings import EvidenceInfo
 
 Outcome = Literal["consistent", "suspicious", "not available", "note"]
 APPLICABLE: tuple[Outcome, ...] = ("consistent", "suspicious")
+# MPO (CIPA DC-007), which phones and stereo cameras write, is JPEG with more pictures after the first.
+JPEG_FORMATS = ("JPEG", "MPO")
 
 # Software that re-encodes the pixels when it saves: its name in the Software
 # tag means the file went through it after capture. Matched as case-insensitive
@@ -38,9 +42,13 @@ TRANSFER_TOOLS = ("nikon transfer", "viewnx", "zoombrowser", "imagebrowser", "wi
 # "Firmware" ("Ver.1.00", "1.00", "v981-79", "Firmware Version 1.0.2"), or its
 # model name with one ("Digital Camera DX-10 Ver1.00"); a program's name with
 # a version is not firmware, so a name is accepted only when it is the camera's.
-_VERSION = r"(?:firmware\s*)?(?:v(?:er(?:sion)?)?\.?\s*)?\d+(?:[.\-_]\d+)*[a-z]?"
+_VERSION = r"(?:firmware\s*)?(?:v(?:er(?:sion)?)?\.?\s*)?\d+[a-z]?(?:[.\-_]\d+[a-z]?)*"
 _FIRMWARE = re.compile(rf"^{_VERSION}$", re.I)
 _ENDS_WITH_VERSION = re.compile(rf"\b{_VERSION}$", re.I)
+# A firmware build id is one token of letters and digits ("J327T1UVS4ASH2",
+# "D1v024j", "HD7.01.01.90.00"): at least three digits and no run of more
+# than three letters, which a program's name has.
+_BUILD_ID = re.compile(r"^(?=(?:[^0-9]*[0-9]){3})(?![^ ]*[a-z]{4})[a-z0-9][a-z0-9.\-_]{2,23}$", re.I)
 _EXIF_DATE = re.compile(r"^\s*(\d{4}):(\d{2}):(\d{2})[ T](\d{2}):(\d{2}):(\d{2})\s*$")
 
 
@@ -74,11 +82,15 @@ def exif_presence(info: EvidenceInfo) -> Check:
     title = "EXIF present"
     exif = info.exif
     if not exif.raw:
-        if info.format == "JPEG":
-            return Check("exif_present", title, "suspicious",
-                         "The JPEG carries no EXIF at all, which a camera always writes; but many platforms "
-                         "(messengers, social networks, web uploads) strip it, so this alone shows only that the "
-                         "file is not as the camera wrote it.")
+        # Not "suspicious": messengers, social networks, web uploads and
+        # research data sets strip EXIF from authentic photos routinely (every
+        # authentic photo of two public forgery data sets lacks it), so its
+        # absence says nothing about the pixels.
+        if info.format in JPEG_FORMATS:
+            return Check("exif_present", title, "note",
+                         "The JPEG carries no EXIF at all, which a camera always writes: the file is not as the "
+                         "camera wrote it, but messengers, social networks and web uploads strip EXIF from untouched "
+                         "photos too, so this says nothing about whether the pixels were changed.")
         return Check("exif_present", title, "note",
                      f"The {info.format} file carries no EXIF; cameras seldom write {info.format}, so there is "
                      "nothing to compare with.")
@@ -114,27 +126,50 @@ def classify_software(software: str, make: str | None = None, model: str | None 
     if any(t in words for t in TRANSFER_TOOLS):
         return "transfer"
     text = software.strip()
-    if _FIRMWARE.match(text):
+    if _FIRMWARE.match(text) or _BUILD_ID.match(text):
         return "firmware"
     names = [n.strip().casefold() for n in (model, make) if n and len(n.strip()) >= 3]
-    # A model name often repeats the make ("Canon PowerShot SX60 HS"); its
-    # last word is enough to recognise it inside a firmware string.
+    # A model name often repeats the make ("Canon PowerShot SX60 HS",
+    # "PENTAX *ist DL"); its last word, or what follows the make, is enough to
+    # recognise it inside a firmware string.
     names += [n.split()[-1] for n in names if len(n.split()) > 1 and len(n.split()[-1]) >= 3]
+    names += [n.split(None, 1)[1] for n in names if len(n.split()) > 1 and len(n.split(None, 1)[1]) >= 3]
     if _ENDS_WITH_VERSION.search(text) and any(n in low for n in names):
+        return "firmware"
+    # Phones name their build after the model ("SM-N900A": "N900AUCUCNC2").
+    parts = [p.casefold() for p in re.split(r"[\s\-_]+", model or "") if len(p) >= 4 and re.search(r"\d", p)]
+    if " " not in text and any(low.startswith(p) for p in parts):
         return "firmware"
     return "unknown"
 
 
-def software_tag(info: EvidenceInfo) -> Check:
-    """The Software tag (0x0131): an editor's name means the file was saved by it."""
-    title = "Software tag"
+def software_tag(info: EvidenceInfo, xmp_agents: Sequence[tuple[str, str]] = ()) -> Check:
+    """The Software tag (0x0131) and the programs XMP names: an editor's name means the file was saved by it.
+
+    ``xmp_agents`` are ``(kind, name)`` pairs from :func:`.xmp.xmp_agents`.
+    An editor as XMP ``CreatorTool`` made the file and is suspicious as in
+    the Software tag; an editor only in the XMP history is a note, because
+    catalogue programs (Bridge, Lightroom, Camera Raw) record metadata-only
+    saves of an untouched JPEG there too.
+    """
+    title = "Software tag and XMP"
     sw = info.exif.software
-    if sw is None:
-        return Check("software", title, "not available", "The file has no Software tag.")
-    kind = classify_software(sw, info.exif.make, info.exif.model)
-    if kind == "editor":
+    creators = [n for k, n in xmp_agents if k == "creator" and classify_software(n) == "editor"]
+    history = [n for k, n in xmp_agents if k == "history" and classify_software(n) == "editor"]
+    if sw is not None and classify_software(sw, info.exif.make, info.exif.model) == "editor":
         return Check("software", title, "suspicious",
                      f"The Software tag reads {_quoted(sw)}, an image editor: the file was saved by it after capture.")
+    if creators:
+        return Check("software", title, "suspicious",
+                     f"The XMP names {_quoted(creators[0])} as the program that created the file (CreatorTool), an "
+                     "image editor: the file was saved by it after capture.")
+    if history:
+        return Check("software", title, "note",
+                     f"The XMP history names {_quoted(history[0])}, an image editor; such entries are also written "
+                     "by metadata-only edits, so they do not show that the pixels changed.")
+    if sw is None:
+        return Check("software", title, "not available", "The file has no Software tag and no XMP naming an editor.")
+    kind = classify_software(sw, info.exif.make, info.exif.model)
     if kind == "transfer":
         return Check("software", title, "note",
                      f"The Software tag reads {_quoted(sw)}, a transfer or cataloguing tool that rewrites metadata "
@@ -160,12 +195,28 @@ def parse_exif_datetime(text: str | None) -> datetime | None:
         return None
 
 
+def exposure_time_s(info: EvidenceInfo) -> float | None:
+    """ExposureTime (0x829A) in seconds from the raw tags, or None."""
+    for tag in info.exif.raw:
+        if tag.name == "ExposureTime":
+            try:
+                value = float(tag.value)
+            except ValueError:
+                return None
+            return value if math.isfinite(value) and value >= 0 else None
+    return None
+
+
 def datetimes(info: EvidenceInfo, tolerance_s: float) -> Check:
     """DateTime (0x0132, last change) against DateTimeOriginal (0x9003, capture).
 
     A camera writes both at capture; a later DateTime means a program saved
     the file afterwards. ``tolerance_s`` allows for cameras that stamp them at
-    slightly different moments of the write.
+    slightly different moments of the write. DateTimeOriginal marks the
+    shutter release and a camera may stamp DateTime when it writes the file,
+    after the exposure and, with long-exposure noise reduction, a dark frame
+    as long again: a later DateTime is therefore accepted up to
+    ``tolerance_s`` + 2 x ExposureTime.
     """
     title = "DateTime vs DateTimeOriginal"
     raw_mod, raw_orig = info.exif.datetime, info.exif.datetime_original
@@ -179,16 +230,20 @@ def datetimes(info: EvidenceInfo, tolerance_s: float) -> Check:
                      f"DateTime {_quoted(raw_mod)} and DateTimeOriginal {_quoted(raw_orig)} are not both valid "
                      "EXIF dates (YYYY:MM:DD HH:MM:SS); blank or malformed dates cannot be compared.")
     delta = (mod - orig).total_seconds()
-    if delta > tolerance_s:
+    exposure = exposure_time_s(info)
+    later = tolerance_s + 2 * (exposure or 0.0)
+    allowed = (f"{later:.3g} s: {tolerance_s:g} s plus twice the {exposure:.3g} s exposure"
+               if exposure is not None and 2 * exposure >= 0.5 else f"{tolerance_s:g} s")
+    if delta > later:
         return Check("datetime", title, "suspicious",
                      f"DateTime {raw_mod} is {_duration(delta)} after DateTimeOriginal {raw_orig} (tolerance "
-                     f"{tolerance_s:g} s): the file was saved again after capture.")
+                     f"{allowed}): the file was saved again after capture.")
     if delta < -tolerance_s:
         return Check("datetime", title, "suspicious",
                      f"DateTime {raw_mod} is {_duration(-delta)} before DateTimeOriginal {raw_orig}, which no camera "
                      "writes: one of the two was rewritten.")
     return Check("datetime", title, "consistent",
-                 f"DateTime {raw_mod} and DateTimeOriginal {raw_orig} agree within {tolerance_s:g} s.")
+                 f"DateTime {raw_mod} and DateTimeOriginal {raw_orig} agree within {allowed}.")
 
 
 def _duration(seconds: float) -> str:
@@ -204,10 +259,11 @@ def _duration(seconds: float) -> str:
 def dimensions(info: EvidenceInfo) -> Check:
     """EXIF PixelXDimension/PixelYDimension against the stored pixel grid.
 
-    A camera records the size it wrote; a swap is accepted only with an
+    A camera records the size it wrote; a swap is consistent with an
     orientation tag of 5 to 8, as a camera that stores rotated pixels may
-    record it. Otherwise a difference means the pixels were resized, cropped
-    or rotated after capture.
+    record it, and a note otherwise (turned after capture, content
+    unchanged). Any other difference means the pixels were resized or
+    cropped after capture.
     """
     title = "EXIF pixel dimensions"
     ew, eh = info.exif.exif_image_width, info.exif.exif_image_height
@@ -223,9 +279,12 @@ def dimensions(info: EvidenceInfo) -> Check:
             return Check("dimensions", title, "consistent",
                          f"EXIF records {ew} x {eh} pixels, the stored {w} x {h} swapped as the orientation tag "
                          f"({info.exif.orientation}) allows.")
-        return Check("dimensions", title, "suspicious",
+        # Viewers and operating systems turn photos losslessly and leave the
+        # EXIF size alone: a turn changes no content, so it is a note.
+        return Check("dimensions", title, "note",
                      f"EXIF records {ew} x {eh} pixels but the stored grid is {w} x {h}, turned by 90 degrees without "
-                     "an orientation tag that explains it: the pixels were rotated after capture.")
+                     "an orientation tag that explains it: the pixels were rotated after capture, which changes no "
+                     "content.")
     same_aspect = abs(ew * h - eh * w) <= max(ew, w)
     how = "resized keeping the aspect ratio (or cropped to the same aspect ratio)" if same_aspect else "cropped"
     return Check("dimensions", title, "suspicious",

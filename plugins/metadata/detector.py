@@ -1,11 +1,14 @@
 """The metadata detector: the checks examiners run first, as one typed result.
 
 Checks, in the report's order: EXIF present (:func:`.checks.exif_presence`),
-Software tag (:func:`.checks.software_tag`), DateTime vs DateTimeOriginal
-(:func:`.checks.datetimes`), EXIF pixel dimensions (:func:`.checks.dimensions`),
-embedded thumbnail (:mod:`.thumbnail`), JPEG quantisation tables
-(:mod:`.quantisation`) and the lens the EXIF names against the lens
-detector's measured distortion (:mod:`.lens_check`).
+Software tag and XMP creator tool (:func:`.checks.software_tag`,
+:mod:`.xmp`), DateTime vs DateTimeOriginal (:func:`.checks.datetimes`), EXIF
+pixel dimensions (:func:`.checks.dimensions`), embedded thumbnail
+(:mod:`.thumbnail`), JPEG quantisation tables (:mod:`.quantisation`) and the
+lens the EXIF names against the lens detector's measured distortion
+(:mod:`.lens_check`). How often each calls an untouched camera original
+suspicious is measured by ``benchmarks/metadata_real.py`` and quoted in the
+report (:mod:`.real_rates`).
 
 Metadata is never proof on its own and is not a statistical test here: the
 result has no p-value and no NFA, so the fused verdict never rests on it. Its
@@ -25,9 +28,10 @@ from . import lens_check
 from .checks import APPLICABLE, Check, datetimes, dimensions, dimensions_changed, exif_presence, software_tag
 from .quantisation import quantisation_check
 from .thumbnail import ThumbnailThresholds, thumbnail_check
+from .xmp import xmp_agents
 
 NAME = "metadata"
-VERSION = "1.0.0"
+VERSION = "1.1.0"
 
 REFERENCES = (
     "CIPA DC-008-2019 / JEITA CP-3451E, Exchangeable image file format for digital still cameras: Exif Version 2.32, "
@@ -40,6 +44,13 @@ REFERENCES = (
     "E. Kee, H. Farid, Digital image authentication from thumbnails, Proc. SPIE 7541, Media Forensics and "
     "Security II, 2010 (thumbnails regenerated or left stale by editing; here the thumbnail's content is compared "
     "with the image's).",
+    "ISO 16684-1:2019, Extensible metadata platform (XMP) specification, Part 1: Data model, serialization and "
+    "core properties (xmp:CreatorTool, xmpMM:History with stEvt:softwareAgent).",
+    "J. A. Nelder, R. Mead, A simplex method for function minimization, The Computer Journal 7(4), 308-313, 1965 "
+    "(aligning the thumbnail with the part of the image it shows).",
+    "M. Ayer, H. D. Brunk, G. M. Ewing, W. T. Reid, E. Silverman, An empirical distribution function for sampling "
+    "with incomplete information, Ann. Math. Statist. 26(4), 641-647, 1955 (pool-adjacent-violators: the "
+    "thumbnail's monotone tone curve).",
     "lensfun lens database (lensfun project, bundled with lensfunpy), CC BY-SA 3.0; distortion models poly3, poly5 "
     "and ptlens as documented in lensfun's lensfun.h.",
     "H. Dersch, Panorama Tools, radial lens correction with coefficients a, b, c (the ptlens model "
@@ -52,10 +63,10 @@ DEFAULT_PARAMS: dict[str, Any] = {
     "thumbnail_max_bytes": 262144,
     "thumbnail_max_pixels": 1048576,
     "thumbnail_aspect_tolerance": 0.03,
-    "thumbnail_min_correlation": 0.9,
+    "thumbnail_min_correlation": 0.95,
     "thumbnail_blur_px": 1.5,
     "thumbnail_change_threshold": 0.12,
-    "thumbnail_max_region_fraction": 0.005,
+    "thumbnail_max_region_fraction": 0.003,
     "lens_k1_tolerance": 0.02,
     "lens_alpha": 0.01,
     "lens_fit_grid": 64,
@@ -120,8 +131,8 @@ def analyse(evidence: Evidence, params: Mapping[str, Any], prior: Mapping[str, D
     info = evidence.info
     marks: dict[str, float] = {}
     t = time.perf_counter()
-    checks = [exif_presence(info), software_tag(info), datetimes(info, float(params["datetime_tolerance_s"])),
-              dimensions(info)]
+    checks = [exif_presence(info), software_tag(info, xmp_agents(evidence.data)),
+              datetimes(info, float(params["datetime_tolerance_s"])), dimensions(info)]
     marks["tags"] = round(time.perf_counter() - t, 4)
 
     t = time.perf_counter()

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .checks import Check
+from .checks import JPEG_FORMATS, Check
 
 # T.81 Annex K, tables K.1 (luminance) and K.2 (chrominance), natural (row-major) order.
 IJG_LUMA = np.array([
@@ -142,7 +142,7 @@ def quantisation_check(tables: Mapping[str, Sequence[int]], file_format: str, ma
         Lower-case words; a Make containing one names a maker that writes its own tables.
     """
     title = "JPEG quantisation tables"
-    if file_format != "JPEG":
+    if file_format not in JPEG_FORMATS:
         return Check("quantisation", title, "not available", f"The file is {file_format}, not JPEG."), None
     est = estimate(tables)
     if est is None:

@@ -10,6 +10,7 @@ from forensics_core.report import Figure, ReportSection
 
 from .detector import DEFAULT_PARAMS, REFERENCES, thresholds
 from .figures import lens_plot_svg, thumbnail_png
+from .real_rates import corpus_sentence, rate_sentence
 from .thumbnail import ThumbnailError, compare, extract, luma_of
 
 
@@ -60,7 +61,8 @@ def _figures(finding: DetectorFinding, evidence: Evidence) -> dict[str, Figure]:
             figures["thumbnail"] = Figure(
                 thumbnail_png(evidence.pixels, thumb, cmp, limits.change_threshold), "image/png",
                 "Left: the stored image, reduced; middle: the thumbnail embedded in the EXIF (IFD1), enlarged, "
-                "with its picture area in blue; right: their difference after blurring and a gain/offset fit, red "
+                "with its picture area in blue; right: their difference after matching the part of the image the thumbnail "
+                "shows, blurring and fitting the thumbnail's tone curve, red "
                 "above the change threshold, the largest differing region in orange. Orientation is applied to "
                 "neither.")
     lens = finding.details.get("lens", {})
@@ -78,7 +80,7 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
     details = finding.details
     thumb = details.get("thumbnail", {})
     context = {
-        "checks": details.get("checks", []),
+        "checks": [{**c, "rate": rate_sentence(str(c.get("id")))} for c in details.get("checks", [])],
         "n_applicable": details.get("n_applicable", 0),
         "n_suspicious": details.get("n_suspicious", 0),
         "score_text": "not computed" if finding.score is None else f"{finding.score:.2f}",
@@ -89,6 +91,7 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
         "lens_rows": _lens_rows(details.get("lens", {})),
         "datetime_tolerance_s": finding.parameters.get("datetime_tolerance_s", DEFAULT_PARAMS["datetime_tolerance_s"]),
         "own_table_makers": ", ".join(finding.parameters.get("own_table_makers", DEFAULT_PARAMS["own_table_makers"])),
+        "rates_corpus": corpus_sentence(),
         "references": list(REFERENCES),
     }
     template = files(__package__).joinpath("templates/section.html.j2").read_text(encoding="utf-8")

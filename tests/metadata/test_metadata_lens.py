@@ -160,7 +160,7 @@ def test_comparison_outcomes():
         cmp = compare(evidence_info, finding, False, 0.02, 0.01, 64)
         assert cmp.outcome == outcome
         check = lens_check(cmp, 0.02, 0.01)
-        assert check.outcome == {"agrees": "consistent", "disagrees": "suspicious"}.get(outcome, "not available")
+        assert check.outcome == {"agrees": "consistent", "disagrees": "note"}.get(outcome, "not available")
     for status in (Status.ERROR, Status.INCONCLUSIVE):
         other = compare(evidence_info, _lens_finding(predicted, status=status), False, 0.02, 0.01, 64)
         assert other.outcome == "lens detector did not measure k1" and status.value in other.reason

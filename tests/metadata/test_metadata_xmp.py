@@ -1,0 +1,59 @@
+"""The XMP creator tool and history, and the measured rates the report quotes."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+from forensics_plugins.metadata.real_rates import corpus_sentence, measured_rates, rate_sentence
+from forensics_plugins.metadata.xmp import xmp_agents
+from metadata_helpers import exif_bytes, jpeg, photo
+
+PACKET = b"""<?xpacket begin="" id="W5M0MpCehiHzreSzNTczkc9d"?>
+<x:xmpmeta xmlns:x="adobe:ns:meta/"><rdf:RDF xmlns:rdf="http://www.w3.org/1999/02/22-rdf-syntax-ns#">
+<rdf:Description rdf:about="" xmlns:xmp="http://ns.adobe.com/xap/1.0/"
+  xmlns:xmpMM="http://ns.adobe.com/xap/1.0/mm/" xmlns:stEvt="http://ns.adobe.com/xap/1.0/sType/ResourceEvent#"
+  xmp:CreatorTool="Adobe Photoshop 25.0 (Windows)">
+<xmpMM:History><rdf:Seq>
+<rdf:li stEvt:action="saved" stEvt:softwareAgent="GIMP 2.10" stEvt:changed="/"/>
+<rdf:li><stEvt:softwareAgent>Adobe Photoshop Lightroom Classic 12.0 &amp; more</stEvt:softwareAgent></rdf:li>
+<rdf:li stEvt:action="saved" stEvt:softwareAgent="GIMP 2.10" stEvt:changed="/"/>
+</rdf:Seq></xmpMM:History></rdf:Description></rdf:RDF></x:xmpmeta><?xpacket end="w"?>"""
+
+
+def test_creator_tool_and_history_are_read():
+    data = jpeg(photo((64, 48)), exif_bytes(make="Canon"), xmp=PACKET)
+    assert xmp_agents(data) == [("creator", "Adobe Photoshop 25.0 (Windows)"), ("history", "GIMP 2.10"),
+                                ("history", "Adobe Photoshop Lightroom Classic 12.0 & more")]
+
+
+def test_no_xmp_or_not_an_image():
+    assert xmp_agents(jpeg(photo((64, 48)))) == []
+    assert xmp_agents(b"\xff\xd8 not really") == []
+
+
+def test_an_editor_in_the_xmp_is_flagged(tmp_path):
+    from forensics_plugins.metadata.detector import DEFAULT_PARAMS, analyse
+    from metadata_helpers import evidence_from
+
+    evidence = evidence_from(jpeg(photo(), exif_bytes(make="Canon", software="Ver.1.00"), xmp=PACKET), tmp_path)
+    checks = {c["id"]: c for c in analyse(evidence, DEFAULT_PARAMS, {}).details["checks"]}
+    assert checks["software"]["outcome"] == "suspicious" and "CreatorTool" in checks["software"]["observation"]
+
+
+def test_shipped_rates_are_quoted():
+    rates = measured_rates()
+    assert rates is not None and rates["n_photos"] > 0
+    for check_id, row in rates["checks"].items():
+        assert 0 <= row["suspicious"] <= row["applicable"] <= rates["n_photos"]
+        # The acceptance bound of every check on camera originals.
+        assert row["suspicious"] <= 0.02 * rates["n_photos"], check_id
+    assert "camera originals" in rate_sentence("thumbnail") and "95% confidence" in rate_sentence("thumbnail")
+    assert rates["measured"] in corpus_sentence()
+    assert rate_sentence("no such check") is None
+
+
+def test_benchmark_without_the_corpus(tmp_path):
+    script = Path(__file__).resolve().parents[2] / "benchmarks" / "metadata_real.py"
+    out = subprocess.run([sys.executable, str(script), str(tmp_path / "absent")], capture_output=True, text=True,
+                         timeout=60)
+    assert out.returncode == 0 and "absent" in out.stdout
