@@ -290,6 +290,12 @@ class _Stacked:
         """Per-line sums along axis 0: shape (N, ...) -> (m, ...)."""
         return np.add.reduceat(values, self.starts, axis=0)
 
+    def subset(self, keep: np.ndarray) -> _Stacked:
+        """The lines where ``keep`` (shape (m,), bool) is true, in order."""
+        counts = self.counts[keep]
+        starts = np.concatenate(([0], np.cumsum(counts)[:-1])).astype(np.intp)
+        return _Stacked(self.points[keep[self.ids]], starts, counts, np.repeat(np.arange(counts.size), counts))
+
 
 def _line_model(
     s: _Stacked, params: np.ndarray, k2: float, centre: np.ndarray
@@ -325,7 +331,14 @@ def _initial_lines(s: _Stacked, k1: np.ndarray) -> np.ndarray:
 def _levenberg_marquardt(
     s: _Stacked, params: np.ndarray, k2: float, centre: np.ndarray, max_iter: int = 50
 ) -> np.ndarray:
-    """Independent 3-parameter LM fits of all lines at once (stacked 3x3 solves)."""
+    """Independent 3-parameter LM fits of all lines at once (stacked 3x3 solves).
+
+    A line leaves the stack once an accepted step no longer lowers its cost
+    (or its damping has grown past any use), so later iterations cost only
+    the points of the lines still moving.
+    """
+    out = np.array(params, dtype=np.float64)
+    active = np.arange(s.counts.size)
     lam = np.full(s.counts.size, 1e-3)
     residual, jac = _line_model(s, params, k2, centre)
     cost = s.sum(residual**2)
@@ -349,7 +362,18 @@ def _levenberg_marquardt(
         lam = np.where(better, lam * 0.3, lam * 10.0)
         if np.all(converged):
             break
-    return params
+        done = (better & converged) | (lam > 1e12)
+        if done.any():
+            out[active[done]] = params[done]
+            stay = ~done
+            point_stay = stay[s.ids]
+            s = s.subset(stay)
+            params, lam, cost, active = params[stay], lam[stay], cost[stay], active[stay]
+            residual, jac = residual[point_stay], jac[point_stay]
+            if active.size == 0:
+                break
+    out[active] = params
+    return out
 
 
 def fit_lines(

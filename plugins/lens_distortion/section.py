@@ -31,7 +31,8 @@ def _line_rows(lines: list[dict[str, Any]]) -> list[dict[str, Any]]:
             "id": ln["id"], "distance": ln["distance"], "length_px": ln["length_px"],
             "k1_text": _num(ln["k1"], "+.4f"), "se_text": _num(ln["k1_stderr"], ".4f"),
             "paper_text": _num(ln["k1_paper"], "+.5f"), "rms_text": _num(ln["residual_rms_px"], ".2f"),
-            "z_text": _num(ln["z"], "+.1f"), "status": _STATUS_WORDS[cls], "css": f"line-{cls}",
+            "z_text": _num(ln["z"], "+.1f"), "css": f"line-{cls}",
+            "status": "departs alone: curved or non-straight object?" if ln.get("outlier") else _STATUS_WORDS[cls],
         })
     return rows
 
