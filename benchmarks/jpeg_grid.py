@@ -63,9 +63,10 @@ def photo(size: tuple[int, int]) -> Path:
 def _warm(target: Path) -> float:
     """Compile (or load) the numba kernels once; returns the seconds it took."""
     code = ("import time, numpy as np; t = time.perf_counter(); "
-            "from forensics_plugins.jpeg_grid.zeros import zero_counts; "
-            "from forensics_plugins.jpeg_grid.votes import vote_map, cell_tally; "
-            "z = zero_counts(np.zeros((64, 64), np.float32), (0.5, 1.5))[0]; cell_tally(vote_map(z)); "
+            "from forensics_plugins.jpeg_grid.zeros import zero_counts, flat_blocks; "
+            "from forensics_plugins.jpeg_grid.regions import components; "
+            "from forensics_plugins.jpeg_grid.votes import vote_map; "
+            "y = np.zeros((64, 64), np.float32); components(vote_map(zero_counts(y), flat_blocks(y)), np.ones(64, bool)); "
             "print(time.perf_counter() - t)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     return float(out.stdout)

@@ -20,6 +20,10 @@ from PIL import Image
 
 from forensics_core import Evidence
 
+# Formats whose image is JPEG-coded: an MPO (as phones and action cameras write, with a
+# preview appended) holds its main image as an ordinary JPEG first.
+JPEG_FORMATS = ("JPEG", "MPO")
+
 # Below this side no 8x8 block has room to vote on all 64 grid origins and
 # leave a meaningful count.
 MIN_SIDE = 32
@@ -41,12 +45,16 @@ class Luminance:
     table : ndarray, shape (8, 8), or None
         Luminance quantisation table of the file's (last) JPEG compression, in
         natural (row-major) order; None when the file is not a JPEG.
+    jpeg : bool
+        The file is a JPEG: every pixel went through its compression on the
+        grid (0, 0).
     """
 
     y: np.ndarray
     source: str
     note: str
     table: np.ndarray | None
+    jpeg: bool = False
 
 
 def _decoded_y(data: bytes) -> tuple[np.ndarray, str] | None:
@@ -85,16 +93,16 @@ def luminance(evidence: Evidence) -> Luminance:
     """
     table = None
     raw = evidence.info.quantization_tables.get("0")
-    if evidence.info.format == "JPEG" and raw is not None and len(raw) == 64:
+    if evidence.info.format in JPEG_FORMATS and raw is not None and len(raw) == 64:
         table = np.asarray(raw, dtype=np.float64).reshape(8, 8)
-    if evidence.info.format == "JPEG":
+    if evidence.info.format in JPEG_FORMATS:
         decoded = _decoded_y(evidence.data)
         if decoded is not None and decoded[0].shape == evidence.pixels.shape[:2]:
             y, source = decoded
             note = ("the JPEG's luminance channel exactly as decoded (no colour conversion)"
                     if source == "jpeg_y" else "the greyscale JPEG's decoded channel")
-            return Luminance(y=y, source=source, note=note, table=table)
-        return Luminance(y=_luma(evidence), source="luma", table=table,
+            return Luminance(y=y, source=source, note=note, table=table, jpeg=True)
+        return Luminance(y=_luma(evidence), source="luma", table=table, jpeg=True,
                          note="the BT.601 luma of the decoded pixels, rounded (the JPEG's Y channel was not available)")
     return Luminance(y=_luma(evidence), source="luma", table=None,
                      note="the BT.601 luma of the stored pixels, rounded to grey levels")

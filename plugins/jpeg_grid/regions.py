@@ -1,229 +1,243 @@
-"""Regions whose pixels vote for a grid other than the main one, each with its NFA.
+"""Regions of pixels voting for one grid, grown as in ZERO, with their NFA.
 
-Votes are tallied per tile of 8x8 pixels. For each candidate grid ``g``:
+ZERO (Nikoukhah et al., CVPRW 2019; IPOL 2021) grows a region from a
+pixel voting for grid ``g`` by adding every pixel that votes ``g`` and lies
+within Chebyshev distance ``W = 9`` of a pixel already in it. A region is
+therefore exactly a connected component of the pixels voting ``g`` under the
+adjacency ``|dx| <= W and |dy| <= W``, which this module computes with a
+union-find over cells of ``W + 1`` pixels a side.
 
-1. seeds: tiles whose surrounding window (each of ``seed_windows``, tiles
-   square: a small one for small dense regions, a large one for large
-   sparse ones) holds significantly more votes for ``g`` than the null rate
-   ``p_g`` (binomial tail below ``10 ** seed_log10``);
-2. growing: the seeds' connected component of tiles whose local vote
-   density (``grow_window`` tiles square) exceeds the background density
-   (away from the seeds) by ``grow_fraction`` of the seeds' excess over it,
-   holes filled;
-3. validation, as in ZERO (Nikoukhah et al., CVPRW 2019; IPOL 2021): the region's
-   votes for ``g`` against the binomial law of its trials with probability
-   ``p_g``, ``NFA = N_tests * P[B(n, p_g) >= k]``.
-
-Votes are not independent: a pixel's vote depends on the 64 blocks around it,
-and neighbouring pixels share most of them. One trial is therefore counted
-per ``pixels_per_trial`` pixels (both ``n`` and ``k`` are divided by it), a
-conservative choice; the default 64 is one trial per 8x8 block.
+A meaningful region must hold at least one vote per 8x8 block on average, so
+its votes are rarely more than 8 pixels apart; ``W = 9`` allows some slack.
+Its NFA is ``N_T * P[B(n, 1/64) >= k]`` with ``n`` its bounding box's area
+and ``k`` its pixels, both divided by 64 (neighbouring votes share most of
+their blocks, one vote per block is a rough count of the independent ones).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
 
+import numba as nb
 import numpy as np
-from scipy import ndimage, stats
 
 from .nfa import log10_binomial_tail
+
+W = 9
+P_VOTE = 1.0 / 64.0
 
 
 @dataclass(frozen=True)
 class Region:
-    """One detected region.
+    """One grown region.
 
     Attributes
     ----------
+    label : int
+        Its value in the label map of :func:`components`.
     grid : int
         Grid code ``8 * dy + dx`` its pixels vote for.
-    tiles : ndarray, shape (Ht, Wt), bool
-        Its tiles (``cell`` x ``cell`` pixels each).
     n_pixels : int
-        Pixels of the region that could vote.
-    votes : int
-        Their votes for ``grid``.
-    p_null : float
-        Probability of a vote for ``grid`` under the null hypothesis.
+        Its pixels (all voting ``grid``).
+    bbox : tuple of int
+        ``(x0, y0, x1, y1)``, inclusive pixel bounds.
     log10_nfa : float
         log10 of the number of false alarms.
     """
 
+    label: int
     grid: int
-    tiles: np.ndarray
     n_pixels: int
-    votes: int
-    p_null: float
+    bbox: tuple[int, int, int, int]
     log10_nfa: float
 
 
-def _box_sum(a: np.ndarray, side: int) -> np.ndarray:
-    """Exact sum of the integer array ``a`` over the ``side`` x ``side`` window centred on each entry (``side`` odd).
-
-    Outside the array counts as zero. Integral image in int64, so counts are
-    never rounded (a window exactly at the critical count must stay there).
-    """
-    r = side // 2
-    c = np.pad(a.astype(np.int64), ((r + 1, r), (r + 1, r))).cumsum(axis=0).cumsum(axis=1)
-    return c[side:, side:] - c[:-side, side:] - c[side:, :-side] + c[:-side, :-side]
+@nb.njit(cache=True, inline="always")
+def _find(parent, i):
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
 
 
-class _SeedTest:
-    """Which windows hold significantly many votes: the binomial critical count per window size, computed once.
-
-    Parameters
-    ----------
-    n : ndarray of int
-        Trials of each window.
-    log10_alpha : float
-        A window is a seed when its tail probability is at most ``10 ** log10_alpha``.
-    """
-
-    def __init__(self, n: np.ndarray, log10_alpha: float):
-        self.levels, inverse = np.unique(n, return_inverse=True)
-        self.inverse = inverse.reshape(n.shape)
-        self.alpha = 10.0 ** log10_alpha
-
-    def __call__(self, k: np.ndarray, p: float) -> np.ndarray:
-        # The smallest k with P[X >= k] <= alpha is isf(alpha) + 1 for a discrete law.
-        k_crit = stats.binom.isf(self.alpha, self.levels, p) + 1.0
-        k_crit[self.levels == 0] = np.inf
-        return k >= k_crit[self.inverse]
+@nb.njit(cache=True, inline="always")
+def _union(parent, a, b):
+    ra = _find(parent, a)
+    rb = _find(parent, b)
+    if ra < rb:
+        parent[rb] = ra
+    elif rb < ra:
+        parent[ra] = rb
 
 
-def grow_regions(hist: np.ndarray, eligible: np.ndarray, candidates: Iterable[int], p_null: Mapping[int, float],
-                 log10_n_tests: float, params: Mapping[str, Any], use_ring: bool = False,
-                 references: Mapping[int, tuple[list[int], float]] | None = None) -> list[Region]:
-    """Regions of tiles that vote for a candidate grid more than the null allows.
-
-    Parameters
-    ----------
-    hist : ndarray, shape (Ht, Wt, 64)
-        Votes per grid code per tile (:func:`.votes.cell_tally`).
-    eligible : ndarray, shape (Ht, Wt)
-        Pixels per tile that could vote.
-    candidates : iterable of int
-        Grid codes to look for.
-    p_null : mapping of int to float
-        Null probability of a vote for each candidate.
-    log10_n_tests : float
-        log10 of the number of tests the NFA accounts for.
-    params : mapping
-        ``seed_windows``, ``grow_window`` (tiles), ``seed_log10``, ``grow_fraction``,
-        ``min_region_tiles``, ``pixels_per_trial``, ``ring_tiles``.
-    use_ring : bool
-        Also take as null rate the density of votes for the grid in a ring of
-        ``ring_tiles`` around the region (times the candidate's factor in
-        ``references``), when higher: a region must stand out from its own
-        surroundings, not only from the whole photo.
-    references : mapping of int to (list of int, float), optional
-        For each candidate, grids whose vote density inside the region, times
-        the factor, is also taken as null rate when higher: grids that the
-        photo's content favours about as much as the candidate wherever the
-        candidate is favoured by content alone (see
-        :func:`mirror_references`).
-
-    Returns
-    -------
-    list of Region
-        Every grown region, meaningful or not, strongest first.
-    """
-    ppt = int(params["pixels_per_trial"])
-    seed_windows = [int(w) for w in params["seed_windows"]]
-    grow_w = int(params["grow_window"])
-    eligible = eligible.astype(np.int64)
-    n_grow = np.maximum(_box_sum(eligible, grow_w), 1)
-    seed_tests = [(w, _SeedTest(_box_sum(eligible, w) // ppt, float(params["seed_log10"]))) for w in seed_windows]
-    by_grid = np.ascontiguousarray(np.moveaxis(hist, -1, 0))
-    ring = np.ones((3, 3), bool)
-    found = []
-    for g in candidates:
-        p = float(p_null[g])
-        votes = by_grid[g].astype(np.int64)
-        seeds = np.zeros(votes.shape, bool)
-        for w, test in seed_tests:
-            seeds |= test(_box_sum(votes, w) // ppt, p)
-        if not seeds.any():
-            continue
-        inside = votes[seeds].sum() / max(eligible[seeds].sum(), 1)
-        away = ~ndimage.binary_dilation(seeds, iterations=max(seed_windows))
-        background = votes[away].sum() / max(eligible[away].sum(), 1) if away.any() else 0.0
-        level = background + float(params["grow_fraction"]) * (inside - background)
-        member = ndimage.binary_fill_holes(_box_sum(votes, grow_w) / n_grow > level)
-        labels, _ = ndimage.label(member)
-        for label in np.unique(labels[seeds & member]):
-            if label == 0:
-                continue
-            tiles = labels == label
-            if tiles.sum() < int(params["min_region_tiles"]):
-                continue
-            n = float(eligible[tiles].sum())
-            if n == 0:
-                continue
-            k = float(votes[tiles].sum())
-            local = 0.0
-            if use_ring:
-                around = ndimage.binary_dilation(tiles, ring, iterations=int(params["ring_tiles"])) & ~tiles
-                n_ring = float(eligible[around].sum())
-                if n_ring > 0:
-                    local = float(votes[around].sum()) / n_ring
-            grids, factor = (references or {}).get(g, ((), 1.0))
-            for h in grids:
-                local = max(local, float(by_grid[h][tiles].sum()) / n)
-            p_region = min(1.0, max(p, factor * local))
-            log10_nfa = log10_n_tests + log10_binomial_tail(n / ppt, k / ppt, p_region)
-            found.append(Region(grid=int(g), tiles=tiles, n_pixels=int(n), votes=int(k), p_null=p_region,
-                                log10_nfa=log10_nfa if math.isfinite(log10_nfa) else -1000.0))
-    return sorted(found, key=lambda r: r.log10_nfa)
+@nb.njit(cache=True)
+def _near(py, px, a0, a1, b0, b1, reach):
+    """Whether some pixel of ``a0:a1`` lies within ``reach`` (Chebyshev) of some pixel of ``b0:b1``."""
+    for i in range(a0, a1):
+        for j in range(b0, b1):
+            if abs(py[i] - py[j]) <= reach and abs(px[i] - px[j]) <= reach:
+                return True
+    return False
 
 
-def mirror_references(main: int, axis_factor: float) -> dict[int, tuple[list[int], float]]:
-    """For each grid, its mirror images about the main grid (or its nearest grids) and the tolerance on them.
-
-    With the main grid excluded from the vote, a grid sharing a row or
-    column phase with it (and the main grid's neighbours above all) collects
-    votes wherever the content is smooth along one direction: those votes are
-    content, not a pasted grid. Block statistics do not change when the image
-    is flipped, so content favours ``(mx + dx, my + dy)`` and its mirror
-    images ``(mx - dx, my + dy)``, ``(mx + dx, my - dy)``, ``(mx - dx, my - dy)``
-    alike, whereas a pasted grid raises only itself. A grid that is its own
-    mirror image (``dx, dy`` in {0, 4}) is compared with its four nearest grids
-    and with its transpose ``(mx + dy, my + dx)``: content that favours the
-    half-block shift ``(4, 0)`` favours its neighbours or, in isotropic
-    texture, ``(0, 4)`` too.
-
-    "Alike" holds only roughly for the grids sharing a phase with the main
-    grid: on large smooth areas content was measured to favour one up to 1.35
-    times more than its mirror image. Their reference rates are multiplied by
-    ``axis_factor``; the other grids, which content hardly favours at all
-    (a few votes per thousand pixels), keep a factor of 1.
-
-    Parameters
-    ----------
-    main : int
-        Code of the main grid.
-    axis_factor : float
-        Tolerance applied to the reference rates of grids sharing a row or
-        column phase with the main grid.
-
-    Returns
-    -------
-    dict of int to (list of int, float)
-        For each of the 63 other codes, its reference grid codes and factor.
-    """
-    mx, my = main % 8, main // 8
-    out = {}
+@nb.njit(cache=True)
+def _components(votes, member, reach):
+    h, w = votes.shape
+    # Cells of side reach + 1: two pixels of one grid in one cell are always adjacent, and a pixel's
+    # neighbours lie in its own cell or the 8 around it.
+    side = reach + 1
+    ch, cw = (h + side - 1) // side, (w + side - 1) // side
+    slot = np.full(64, -1, np.int64)
+    m = 0
     for g in range(64):
-        if g == main:
-            continue
-        dx, dy = (g % 8 - mx) % 8, (g // 8 - my) % 8
-        images = {((mx + sx * dx) % 8) + 8 * ((my + sy * dy) % 8) for sx in (1, -1) for sy in (1, -1)} - {g}
-        if not images:
-            images = {((g % 8 + ex) % 8) + 8 * ((g // 8 + ey) % 8) for ex, ey in ((1, 0), (-1, 0), (0, 1), (0, -1))}
-            images.add(((mx + dy) % 8) + 8 * ((my + dx) % 8))
-        out[g] = (sorted(images - {main}), axis_factor if 0 in (dx, dy) else 1.0)
-    return out
+        if member[g]:
+            slot[g] = m
+            m += 1
+    # Member pixels bucketed by (grid, cell), a counting sort.
+    start = np.zeros(m * ch * cw + 1, np.int32)
+    for y in range(h):
+        for x in range(w):
+            g = votes[y, x]
+            if g >= 0 and slot[g] >= 0:
+                start[(slot[g] * ch + y // side) * cw + x // side + 1] += 1
+    for b in range(m * ch * cw):
+        start[b + 1] += start[b]
+    n = start[m * ch * cw]
+    fill = start[:-1].copy()
+    py = np.empty(n, np.int32)
+    px = np.empty(n, np.int32)
+    for y in range(h):
+        for x in range(w):
+            g = votes[y, x]
+            if g >= 0 and slot[g] >= 0:
+                b = (slot[g] * ch + y // side) * cw + x // side
+                py[fill[b]] = y
+                px[fill[b]] = x
+                fill[b] += 1
+    parent = np.empty(n, np.int32)
+    for b in range(m * ch * cw):
+        for k in range(start[b], start[b + 1]):
+            parent[k] = start[b]
+    for j in range(m):
+        for cy in range(ch):
+            for cx in range(cw):
+                b = (j * ch + cy) * cw + cx
+                if start[b] == start[b + 1]:
+                    continue
+                for ey, ex in ((0, 1), (1, -1), (1, 0), (1, 1)):
+                    ny, nx = cy + ey, cx + ex
+                    if ny >= ch or nx < 0 or nx >= cw:
+                        continue
+                    nb_ = (j * ch + ny) * cw + nx
+                    if start[nb_] == start[nb_ + 1]:
+                        continue
+                    if _find(parent, start[b]) == _find(parent, start[nb_]):
+                        continue
+                    if _near(py, px, start[b], start[b + 1], start[nb_], start[nb_ + 1], reach):
+                        _union(parent, start[b], start[nb_])
+    labels = np.full((h, w), -1, np.int32)
+    root_label = np.full(n, -1, np.int32)
+    count = 0
+    for k in range(n):
+        root = _find(parent, k)
+        if root_label[root] < 0:
+            root_label[root] = count
+            count += 1
+    size = np.zeros(count, np.int64)
+    grid = np.zeros(count, np.int8)
+    bbox = np.empty((count, 4), np.int32)
+    bbox[:, 0] = w
+    bbox[:, 1] = h
+    bbox[:, 2] = -1
+    bbox[:, 3] = -1
+    for k in range(n):
+        c = root_label[_find(parent, k)]
+        y, x = py[k], px[k]
+        labels[y, x] = c
+        size[c] += 1
+        grid[c] = votes[y, x]
+        bbox[c, 0] = min(bbox[c, 0], x)
+        bbox[c, 1] = min(bbox[c, 1], y)
+        bbox[c, 2] = max(bbox[c, 2], x)
+        bbox[c, 3] = max(bbox[c, 3], y)
+    return labels, size, grid, bbox
+
+
+def components(votes: np.ndarray, grids: np.ndarray,
+               reach: int = W) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Connected components of the pixels voting for one of ``grids``, pixels of one grid at a time.
+
+    Parameters
+    ----------
+    votes : ndarray, shape (H, W), int8
+        Vote map (:func:`.votes.vote_map`), negative where no vote.
+    grids : ndarray, shape (64,), bool
+        Grid codes taking part.
+    reach : int
+        Two pixels voting the same grid are adjacent when ``|dx| <= reach``
+        and ``|dy| <= reach``.
+
+    Returns
+    -------
+    labels : ndarray, shape (H, W), int32
+        Component index, -1 for pixels not taking part.
+    size : ndarray, shape (K,), int64
+        Pixels per component.
+    grid : ndarray, shape (K,), int8
+        The grid each component votes for.
+    bbox : ndarray, shape (K, 4), int32
+        ``x0, y0, x1, y1`` per component, inclusive.
+    """
+    return _components(np.ascontiguousarray(votes, dtype=np.int8), np.ascontiguousarray(grids, dtype=bool),
+                       int(reach))
+
+
+def log10_n_tests(shape: tuple[int, int]) -> float:
+    """ZERO's number of tests, log10: 64 grids squared times the image size squared, ``(64 X Y)^2``."""
+    return 2.0 * math.log10(64.0) + 2.0 * math.log10(shape[1]) + 2.0 * math.log10(shape[0])
+
+
+def min_region_pixels(log_nt: float) -> int:
+    """Smallest region that can be meaningful (ZERO's ``ceil(64 log_nt / log10 64)`` pixels).
+
+    ``k / 64`` successes at probability 1/64 have a tail of at least
+    ``64 ** -(k / 64)``, so a smaller region cannot bring the NFA below 1.
+    """
+    return math.ceil(64.0 * log_nt / math.log10(64.0))
+
+
+def find_regions(votes: np.ndarray, grids: np.ndarray, log_nt: float) -> tuple[np.ndarray, list[Region]]:
+    """Regions voting for one of ``grids``, large enough to be meaningful, strongest first.
+
+    Parameters
+    ----------
+    votes : ndarray, shape (H, W), int8
+        Vote map.
+    grids : ndarray, shape (64,), bool
+        Grid codes searched.
+    log_nt : float
+        log10 of the number of tests (:func:`log10_n_tests`).
+
+    Returns
+    -------
+    labels : ndarray, shape (H, W), int32
+        Component map from :func:`components`.
+    regions : list of Region
+        Components of at least :func:`min_region_pixels` pixels, meaningful or
+        not, by increasing NFA.
+
+    References
+    ----------
+    T. Nikoukhah, J. Anger, M. Colom, J.-M. Morel, R. Grompone von Gioi, ZERO: a Local JPEG Grid Origin Detector
+    Based on the Number of DCT Zeros and its Applications in Image Forensics, IPOL 11 (2021), pp. 396-433.
+    """
+    labels, size, grid, bbox = components(votes, grids)
+    found = []
+    for k in np.flatnonzero(size >= min_region_pixels(log_nt)):
+        x0, y0, x1, y1 = (int(v) for v in bbox[k])
+        n = (x1 - x0 + 1) * (y1 - y0 + 1) // 64
+        log10_nfa = log_nt + log10_binomial_tail(n, int(size[k]) // 64, P_VOTE)
+        found.append(Region(label=int(k), grid=int(grid[k]), n_pixels=int(size[k]), bbox=(x0, y0, x1, y1),
+                            log10_nfa=log10_nfa if math.isfinite(log10_nfa) else -1000.0))
+    return labels, sorted(found, key=lambda r: r.log10_nfa)

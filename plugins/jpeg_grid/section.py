@@ -13,9 +13,8 @@ from .figures import map_png, vote_map_png
 from .nfa import nfa_text
 
 _STAGE_WORDS = {
-    "foreign": "ZERO vote",
+    "foreign": "own grid",
     "missing": "main grid missing",
-    "hidden": "second vote",
 }
 
 
@@ -23,8 +22,8 @@ def _region_rows(regions: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return [{
         "id": r["id"], "grid": f"({r['grid'][0]}, {r['grid'][1]})", "stage": _STAGE_WORDS.get(r["stage"], r["stage"]),
         "x": f"{r['bbox_px'][0]}-{r['bbox_px'][2]}", "y": f"{r['bbox_px'][1]}-{r['bbox_px'][3]}",
-        "area": f"{100 * r['area_fraction']:.1f} %", "density": f"{100 * r['density']:.1f} %",
-        "p_null": f"{100 * r['p_null']:.2f} %", "nfa": nfa_text(r["log10_nfa"]),
+        "area": f"{100 * r['area_fraction']:.1f} %", "pixels": r["pixels"],
+        "density": f"{100 * r['density']:.1f} %", "nfa": nfa_text(r["log10_nfa"]),
         "css": "line-flagged" if r["meaningful"] else "",
         "verdict": "meaningful" if r["meaningful"] else "not meaningful",
     } for r in regions]
@@ -43,13 +42,15 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
     meaningful = [r for r in regions if r["meaningful"]]
     thresholds = details["thresholds"]
     if finding.status is not Status.OK:
-        decision = "no decision: the photo carries no significant JPEG grid"
+        decision = "no decision: the photo carries no significant JPEG grid and no region votes for one"
     elif meaningful:
-        decision = f"{len(meaningful)} region(s) compressed on another grid"
+        decision = (f"{len(meaningful)} region(s) compressed on another grid or missing the main grid"
+                    if main["significant"] else f"{len(meaningful)} region(s) compressed on a grid the rest lacks")
     else:
         decision = "no region departs from the main grid"
     context = {
         "ok": finding.status is Status.OK,
+        "significant": main["significant"],
         "main": main,
         "main_nfa": nfa_text(main["log10_nfa"]),
         "cropped": details.get("cropped", False),
@@ -60,23 +61,23 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
         "vote_table": _vote_table(details["vote_shares"], main["origin"]) if "vote_shares" in details else [],
         "thresholds": thresholds,
         "n_tests": nfa_text(details["log10_n_tests"]) if "log10_n_tests" in details else None,
-        "vote_maps": {1: "one vote map", 2: "two vote maps"}.get(details.get("vote_maps"), ""),
+        "min_region_px": details.get("min_region_px"),
+        "missing_tested": details.get("missing_tested", False),
         "decision": decision,
         "references": list(REFERENCES),
     }
     figures = {}
     if details.get("map") and finding.status is Status.OK:
         figures["map"] = Figure(map_png(evidence.pixels, details), "image/png",
-                                "The photo with the regions whose pixels vote for another JPEG grid (labelled with "
-                                "its origin (dx, dy)) or lack the main grid (\"no main grid\"), numbered as in the "
-                                "table: filled red, meaningful (NFA below the threshold); orange outline, the "
-                                "strongest candidate when none is.")
+                                "The photo with the regions whose pixels vote for a JPEG grid other than the main "
+                                "one (labelled with its origin (dx, dy)) or lack the main grid (\"no main grid\"), "
+                                "numbered as in the table: filled red, meaningful (NFA below the threshold); orange "
+                                "outline, the strongest candidate when none is.")
     if details.get("map"):
         figures["votes"] = Figure(vote_map_png(details), "image/png",
-                                  "Share of the pixels voting for the main (most voted) grid, per block of the photo "
-                                  "(black 0 %, white 100 %; dark blue: border or clipped pixels, no vote), with the "
-                                  "regions outlined. Flat areas, where every block ties, are dark too. A pasted region "
-                                  "whose grid shows through is dark here; one compressed again with the whole photo is "
-                                  "not, and is found by the second vote.")
+                                  "Share of the votes cast that go to the most voted grid, per block of the photo "
+                                  "(black 0 %, white 100 %; dark blue: no vote cast, as on borders and in flat or "
+                                  "saturated areas), with the regions outlined. A pasted region whose own grid shows "
+                                  "through is dark here.")
     template = files(__package__).joinpath("templates/section.html.j2").read_text(encoding="utf-8")
     return ReportSection(title="JPEG block grid", template=template, context=context, figures=figures)

@@ -6,6 +6,7 @@ import json
 import numpy as np
 import pytest
 from PIL import Image
+from scipy import ndimage
 
 from forensics_core import EvidenceError, Status, load_evidence
 from forensics_core.findings import check_result
@@ -60,10 +61,22 @@ def test_crop_moves_the_main_grid_and_is_reported_but_not_a_splice(tmp_path, sce
     result = analyse(load_evidence(_file(tmp_path, "c.png", buf.getvalue())), DEFAULT_PARAMS)
     d = result.details
     assert result.status is Status.OK
-    assert d["main_grid"]["origin"] == [5, 3] and d["cropped"]
+    assert d["main_grid"]["origin"] == [5, 3] and d["cropped"] and not d["missing_tested"]
     assert "cropped" in result.summary
-    assert not any(r["meaningful"] for r in d["regions"])
+    assert not any(r["meaningful"] for r in d["regions"]) and result.nfa == 1.0
     assert d["luminance"]["source"] == "luma" and d["jpeg_quality_estimate"] is None
+
+
+def test_crop_saved_again_as_jpeg_does_not_make_the_files_own_grid_foreign(tmp_path):
+    # Cropped off-grid, then saved at quality 98: the first compression stays the main grid, and the
+    # file's own grid (0, 0), which every pixel went through, outvotes it over much of the frame.
+    scene = synth.render_scene(np.random.default_rng(1), (600, 800), synth.SOURCES[1])
+    cropped = synth.decode_cropped(synth.jpeg_bytes(scene, 76))[5:, 3:]
+    result = check_result(analyse(load_evidence(_file(tmp_path, "r.jpg", _jpeg(cropped, quality=98))),
+                                  DEFAULT_PARAMS))
+    d = result.details
+    assert result.status is Status.OK and d["main_grid"]["origin"] == [5, 3] and d["cropped"]
+    assert not any(r["meaningful"] for r in d["regions"]) and result.nfa == 1.0
 
 
 @pytest.mark.parametrize("kind, final_quality", [("splice", 100), ("copy_move", 98)])
@@ -78,13 +91,16 @@ def test_region_on_a_shifted_grid_is_found(tmp_path, kind, final_quality):
     assert best["grid"] == [3, 6]
     assert _iou(best, d, case.mask) >= 0.5
     assert result.nfa < 1e-10 and result.score > 0.99
-    for key in ("id", "stage", "grid", "bbox_px", "area_px", "votes", "density", "p_null", "log10_nfa", "tiles_rle"):
+    for key in ("id", "stage", "grid", "bbox_px", "area_px", "pixels", "density", "log10_nfa", "tiles_rle"):
         assert key in best
 
 
-def test_region_missing_the_main_grid_is_found(tmp_path):
+def test_region_missing_the_main_grid_is_found_when_asked_for(tmp_path):
     case = synth.make_uncompressed_paste(4, size=(384, 512), quality=85)
-    result = check_result(analyse(load_evidence(_file(tmp_path, "m.png", case.data)), DEFAULT_PARAMS))
+    ev = load_evidence(_file(tmp_path, "m.png", case.data))
+    assert not any(r["meaningful"] for r in analyse(ev, DEFAULT_PARAMS).details["regions"])
+    result = check_result(analyse(ev, {**DEFAULT_PARAMS, "missing_grid": True}))
+    assert result.details["missing_tested"]
     hits = [r for r in result.details["regions"] if r["meaningful"]]
     assert result.status is Status.OK and hits, result.summary
     assert hits[0]["stage"] == "missing" and hits[0]["grid"] == [0, 0]
@@ -99,6 +115,64 @@ def test_never_compressed_is_inconclusive_not_clean(tmp_path):
     assert result.score is None and result.nfa is None and result.p_value is None
     assert "never JPEG-compressed" in result.summary
     assert result.details["main_grid"]["log10_nfa"] >= 0
+    assert not any(r["meaningful"] for r in result.details["regions"])
+
+
+def _texture(rng, shape, smooth=2.0, contrast=40.0):
+    """Natural-looking grey texture: smoothed noise at two scales, with straight and curved edges."""
+    h, w = shape
+    fine = ndimage.gaussian_filter(rng.normal(0, 1, shape), smooth)
+    coarse = ndimage.gaussian_filter(rng.normal(0, 1, shape), 8 * smooth)
+    yy, xx = np.mgrid[:h, :w]
+    edges = 30.0 * (xx > 0.37 * w) - 25.0 * ((yy - 0.6 * h) ** 2 + (xx - 0.3 * w) ** 2 < (0.2 * h) ** 2)
+    img = 120 + contrast * fine / fine.std() + 2 * contrast * coarse / coarse.std() + edges
+    return np.clip(img, 0, 255)
+
+
+def _rgb(grey, rng):
+    tint = np.array([1.0, 0.97, 0.9])
+    return np.clip(grey[..., None] * tint + rng.normal(0, 1.0, grey.shape + (3,)), 0, 255).round().astype(np.uint8)
+
+
+def test_jpeg_piece_pasted_into_a_never_compressed_image_is_a_foreign_region(tmp_path):
+    rng = np.random.default_rng(11)
+    host = _rgb(_texture(rng, (512, 768)), rng)
+    donor = _rgb(_texture(rng, (384, 512), smooth=1.5), rng)
+    piece = synth.decode_cropped(synth.jpeg_bytes(donor, 80))
+    mask = np.zeros(host.shape[:2], bool)
+    # Pasted 3 columns and 5 rows off the host's (absent) grid: the piece keeps its grid at (3, 5).
+    mask[101:165, 363:459] = True
+    forged = host.copy()
+    forged[mask] = piece[96:160, 160:256].reshape(-1, 3)
+    result = check_result(analyse(load_evidence(_file(tmp_path, "p.png", _png(forged))), DEFAULT_PARAMS))
+    d = result.details
+    hits = [r for r in d["regions"] if r["meaningful"]]
+    assert result.status is Status.OK and hits, result.summary
+    # A piece of 1.6 % of the frame: too small for its grid to be significant over the whole image.
+    assert not d["main_grid"]["significant"] and not d["cropped"] and not d["missing_tested"], d["main_grid"]
+    assert hits[0]["stage"] == "foreign" and hits[0]["grid"] == [3, 5]
+    assert _iou(hits[0], d, mask) >= 0.5
+    assert hits[0]["log10_nfa"] < -10 and result.nfa == pytest.approx(10 ** hits[0]["log10_nfa"])
+    assert "the rest of the photo lacks" in result.summary
+
+
+@pytest.mark.parametrize("quality", [85, 95])
+def test_flat_sky_and_saturated_areas_give_no_region(tmp_path, quality):
+    rng = np.random.default_rng(quality)
+    h, w = 480, 640
+    grey = _texture(rng, (h, w))
+    yy, xx = np.mgrid[:h, :w]
+    sky = yy < 0.35 * h
+    grey[sky] = 150 + 90 * (1 - yy[sky] / (0.35 * h))   # a sky brightening upwards, clipped at the top
+    grey[:60] = 255
+    grey[(yy > 0.8 * h) & (xx < 0.4 * w)] = 0             # crushed shadows
+    grey[(yy > 0.5 * h) & (xx > 0.75 * w)] = 255           # blown highlight
+    result = check_result(analyse(load_evidence(_file(tmp_path, "s.jpg", _jpeg(_rgb(grey, rng), quality=quality))),
+                                  DEFAULT_PARAMS))
+    d = result.details
+    assert result.status is Status.OK and d["main_grid"]["origin"] == [0, 0]
+    assert not any(r["meaningful"] for r in d["regions"]), d["regions"][:1]
+    assert result.nfa == 1.0 and not d["missing_tested"]
 
 
 def test_same_input_same_result(tmp_path):

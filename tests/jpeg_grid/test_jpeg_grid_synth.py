@@ -14,7 +14,7 @@ SIZE = (192, 256)
 
 def _grid_of(y: np.ndarray) -> tuple[int, int]:
     """Origin (dx, dy) whose blocks hold the most zeros on average."""
-    z, _ = zero_counts(y.astype(np.float32), (0.5, 1.0))
+    z = zero_counts(y.astype(np.float32))
     h, w = (z.shape[0] // 8) * 8, (z.shape[1] // 8) * 8
     means = z[:h, :w].reshape(h // 8, 8, w // 8, 8).mean(axis=(0, 2))
     dy, dx = np.unravel_index(np.argmax(means), means.shape)

@@ -1,19 +1,11 @@
-"""Zero counts and votes against direct computations on small images."""
+"""Zero counts, flat blocks and votes against their definitions (ZERO, IPOL 2021)."""
 
 import numpy as np
 import pytest
 from scipy.fft import dctn
 
-from forensics_plugins.jpeg_grid.votes import (
-    NO_VOTE,
-    VOID,
-    cell_tally,
-    clipped_neighbourhood,
-    grid_code,
-    grid_origin,
-    vote_map,
-)
-from forensics_plugins.jpeg_grid.zeros import dct_matrix, zero_counts
+from forensics_plugins.jpeg_grid.votes import NO_VOTE, grid_code, grid_origin, vote_map
+from forensics_plugins.jpeg_grid.zeros import ZERO_THRESHOLD, dct_matrix, flat_blocks, zero_counts
 
 
 def test_dct_matrix_is_the_orthonormal_dct_ii():
@@ -24,20 +16,21 @@ def test_dct_matrix_is_the_orthonormal_dct_ii():
 
 
 @pytest.mark.parametrize("shape", [(8, 8), (19, 23), (70, 41)])
-def test_zero_counts_match_a_direct_dct_at_every_position(shape):
+def test_zero_counts_match_a_direct_dct_at_every_position_without_dc(shape):
     rng = np.random.default_rng(sum(shape))
-    # Smooth integer image plus a few flat patches: many coefficients near the thresholds.
+    # Smooth integer image plus a flat patch and a black one (DC zero): many coefficients near the threshold.
     img = np.round(np.cumsum(rng.normal(0, 1.5, shape), axis=1) + 100).astype(np.float32)
     img[: shape[0] // 2, : shape[1] // 3] = 77
-    z05, z2 = zero_counts(img, (0.5, 2.0), strip=5)
-    assert z05.shape == z2.shape == (shape[0] - 7, shape[1] - 7)
+    img[shape[0] // 2:, shape[1] // 2:] = 0
+    z = zero_counts(img, strip=5)
+    assert z.shape == (shape[0] - 7, shape[1] - 7)
     for y in range(shape[0] - 7):
         for x in range(shape[1] - 7):
-            c = np.abs(dctn(img[y:y + 8, x:x + 8].astype(np.float64), norm="ortho"))
-            # float32 arithmetic may flip a coefficient lying within 1e-4 of a threshold.
-            for t, z in ((0.5, z05), (2.0, z2)):
-                lo, hi = (c < t - 1e-4).sum(), (c < t + 1e-4).sum()
-                assert lo <= z[y, x] <= hi
+            c = np.abs(dctn(img[y:y + 8, x:x + 8].astype(np.float64), norm="ortho")).ravel()[1:]
+            # float32 arithmetic may flip a coefficient lying within 1e-4 of the threshold.
+            lo, hi = (c < ZERO_THRESHOLD - 1e-4).sum(), (c < ZERO_THRESHOLD + 1e-4).sum()
+            assert lo <= z[y, x] <= hi
+    assert z.max() <= 63
 
 
 def test_zero_counts_find_the_grid_of_a_quantised_image():
@@ -47,7 +40,7 @@ def test_zero_counts_find_the_grid_of_a_quantised_image():
     freq = np.add.outer(np.arange(8), np.arange(8))
     blocks = np.round(rng.normal(0, 1, (6, 6, 8, 8)) * 60 / (1 + freq) / q) * q
     img = np.einsum("ui,yxuv,vj->yixj", d, blocks, d).reshape(48, 48) + 128
-    z, _ = zero_counts(np.round(img).astype(np.float32), (0.5, 1.0))
+    z = zero_counts(np.round(img).astype(np.float32))
     aligned = z[::8, ::8].mean()
     straddling = np.delete(np.delete(z, np.s_[::8], axis=0), np.s_[::8], axis=1).mean()
     assert aligned > 25 and aligned > straddling + 20
@@ -55,64 +48,63 @@ def test_zero_counts_find_the_grid_of_a_quantised_image():
 
 def test_zero_counts_refuse_images_smaller_than_a_block():
     with pytest.raises(ValueError):
-        zero_counts(np.zeros((7, 40), np.float32), (0.5, 1.0))
+        zero_counts(np.zeros((7, 40), np.float32))
+    with pytest.raises(ValueError):
+        flat_blocks(np.zeros((40, 7), np.float32))
 
 
-def _brute_votes(z, excluded):
+def test_flat_blocks_match_the_definition():
+    rng = np.random.default_rng(8)
+    img = rng.integers(0, 3, (40, 45)).astype(np.float32)
+    img[5:20, :] = np.arange(45)[None, :]            # every column constant: constant along y
+    img[22:35, 10:30] = np.arange(13)[:, None] * 3   # every row constant: constant along x
+    img[30:40, 33:45] = 255                          # clipped
+    flat = flat_blocks(img)
+    assert flat.shape == (33, 38)
+    for y in range(33):
+        for x in range(38):
+            b = img[y:y + 8, x:x + 8]
+            expected = bool((b == b[:, :1]).all() or (b == b[:1, :]).all())
+            assert flat[y, x] == expected, (y, x)
+    assert flat[5, 0] and flat[22, 10] and flat[30, 33] and not flat[0, 0]
+
+
+def _brute_votes(z, flat):
     nh, nw = z.shape
     out = np.full((nh + 7, nw + 7), NO_VOTE, int)
     for y in range(7, nh):
         for x in range(7, nw):
-            best, arg, tie = -1, -1, False
-            for j in range(8):
-                for i in range(8):
-                    g = grid_code(x - i, y - j)
-                    if g == excluded:
-                        continue
-                    c = z[y - j, x - i]
-                    if c > best:
-                        best, arg, tie = c, g, False
-                    elif c == best:
-                        tie = True
-            out[y, x] = NO_VOTE if tie else arg
+            block = z[y - 7:y + 1, x - 7:x + 1]
+            best = block.max()
+            if (block == best).sum() > 1:
+                continue
+            j, i = np.unravel_index(np.argmax(block), block.shape)
+            by, bx = y - 7 + j, x - 7 + i
+            if not flat[by, bx]:
+                out[y, x] = grid_code(bx, by)
     return out
 
 
-@pytest.mark.parametrize("excluded", [None, 0, 37])
-def test_votes_match_the_definition(excluded):
-    z = np.random.default_rng(5).integers(0, 20, (33, 41)).astype(np.uint8)
-    expected = _brute_votes(z, -1 if excluded is None else excluded)
-    np.testing.assert_array_equal(vote_map(z, excluded), expected)
+@pytest.mark.parametrize("seed", [5, 6])
+def test_votes_match_the_definition(seed):
+    rng = np.random.default_rng(seed)
+    z = rng.integers(0, 30, (33, 41)).astype(np.uint8)
+    flat = rng.random(z.shape) < 0.2
+    np.testing.assert_array_equal(vote_map(z, flat), _brute_votes(z, flat))
 
 
-def test_ties_cast_no_vote_and_a_grid_wins_its_pixels():
+def test_ties_and_flat_blocks_cast_no_vote_and_a_grid_wins_its_pixels():
     z = np.zeros((41, 41), np.uint8)
-    assert (vote_map(z) == NO_VOTE).all()
+    none = np.zeros(z.shape, bool)
+    assert (vote_map(z, none) == NO_VOTE).all()
     z[3::8, 5::8] = 50
-    v = vote_map(z)
-    inner = v[7:34, 7:34]
-    assert (inner == grid_code(5, 3)).all()
+    v = vote_map(z, none)
+    assert (v[7:34, 7:34] == grid_code(5, 3)).all()
+    assert (v[:7] == NO_VOTE).all() and (v[:, -7:] == NO_VOTE).all()
     assert grid_origin(grid_code(5, 3)) == (5, 3)
-
-
-def test_cell_tally_counts_every_vote_once():
-    v = np.random.default_rng(1).integers(-1, 64, (50, 67)).astype(np.int8)
-    hist, eligible = cell_tally(v, 8)
-    assert hist.shape == (6, 8, 64) and eligible.shape == (6, 8)
-    region = v[7:43, 7:60]  # pixels lying in 64 blocks: 7 <= y <= H - 8, 7 <= x <= W - 8
-    assert eligible.sum() == region.size
-    np.testing.assert_array_equal(hist.sum(axis=(0, 1)), np.bincount(region[region >= 0], minlength=64))
-
-
-def test_pixels_near_clipping_do_not_vote_and_are_not_counted():
-    y = np.full((40, 48), 128.0)
-    y[20, 30] = 255.0
-    void = clipped_neighbourhood(y)
-    assert void[13:28, 23:38].all() and void.sum() == 15 * 15
-    z = np.random.default_rng(2).integers(0, 9, (33, 41)).astype(np.uint8)
-    v = vote_map(z, void=void)
-    assert (v[void] == VOID).all() and not (v[~void] == VOID).any()
-    hist, eligible = cell_tally(v, 8)
-    assert eligible.sum() == ((v[7:33, 7:41] != VOID).sum())
+    # The winning blocks flat (a sky on that grid): nobody votes, although they hold the most zeros.
+    flat = np.zeros(z.shape, bool)
+    flat[3::8, 5::8] = True
+    assert (vote_map(z, flat) == NO_VOTE).all()
     with pytest.raises(ValueError):
-        vote_map(z, void=void[:-1])
+        vote_map(z, flat[:-1])
