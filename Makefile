@@ -13,8 +13,9 @@ OUT    ?= out
 SYSTEM_PACKAGES := libpango-1.0-0 libpangoft2-1.0-0 libharfbuzz-subset0 fonts-dejavu-core poppler-utils openssl
 
 VALIDATION ?= out/validation
+REAL ?= ../shared/data/real
 
-.PHONY: demo test validate bench check-python system-packages clean
+.PHONY: demo test validate validate-real bench check-python system-packages clean
 
 demo: $(STAMP)
 	$(PY) -m forensics_core analyze $(SAMPLES) --out $(OUT) --case-id DEMO-1 --exhibit-id 1
@@ -31,6 +32,15 @@ validate: $(STAMP)
 	$(PY) -m forensics_core validate synthetic --out $(VALIDATION)
 	cp $(VALIDATION)/validation.json forensics_core/validation/synthetic.json
 	@echo "shipped record: forensics_core/validation/synthetic.json; page: $(VALIDATION)/validation.html"
+
+# Every set under $(REAL) (each folder with a truth.csv) in one record, shipped
+# beside the synthetic one; reports state it first. Without the corpus there is
+# nothing to measure, which is not an error.
+validate-real: $(if $(wildcard $(REAL)),$(STAMP))
+	@if [ ! -d "$(REAL)" ]; then echo "the real corpus is absent ($(REAL)): nothing validated"; exit 0; fi; \
+	$(PY) -m forensics_core validate "$(REAL)" --out $(OUT)/validation-real && \
+	cp $(OUT)/validation-real/validation.json forensics_core/validation/real.json && \
+	echo "shipped record: forensics_core/validation/real.json; page: $(OUT)/validation-real/validation.html"
 
 bench: $(STAMP)
 	$(PY) benchmarks/lens.py

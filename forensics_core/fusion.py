@@ -17,6 +17,10 @@ smallest adjusted p-value is below ALPHA, and the detectors below it drove the
 verdict. It needs no assumption about how the detectors depend on each other,
 which is why it is the default: the traces (lens, JPEG grid, demosaicing) are
 different, but a resize or recompression affects several of them at once.
+Its level holds on real photos only if each detector's own null does; both
+are measured on real authentic photos by ``forensics validate`` (the page's
+null checks), together with the detectors' pairwise rank dependence
+(:mod:`.validation.dependence`), which tells whether Fisher's rule may be used.
 
 ``fisher``. Fisher's combined statistic ``X = -2 sum(ln p_i)`` follows a
 chi-squared law with 2m degrees of freedom when the m tests are independent;

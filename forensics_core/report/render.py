@@ -27,9 +27,9 @@ from markupsafe import Markup
 from ..evidence import Evidence
 from ..findings import ExifSummary, Findings
 from ..plugins import PluginHost
-from ..validation.record import ValidationRecord, shipped_record
+from ..validation.record import ValidationRecord
 from . import images, wording
-from .error_rates import ErrorRates, error_rates
+from .error_rates import ErrorRates, given_error_rates, shipped_error_rates
 from .plugin_sections import DetectorSection, section_for
 
 TEMPLATES_PACKAGE = "forensics_core.templates"
@@ -72,8 +72,9 @@ class ReportOptions:
     report_date : str or None
         ISO date-time (UTC) printed as the report's date; default now.
     validation : ValidationRecord or None
-        The error-rate figures to state; default the record shipped with
-        the release (``make validate``), if any.
+        The one error-rate record to state; default the records shipped
+        with the release, on real photos (``make validate-real``) and on
+        synthetic ones (``make validate``), those that exist.
     validation_source : str or None
         Where ``validation`` was read from, as printed in the report.
     """
@@ -249,12 +250,9 @@ def _summary(findings: Findings) -> dict[str, Any]:
 
 def _error_rates(findings: Findings, options: ReportOptions) -> ErrorRates:
     if options.validation is not None:
-        return error_rates(findings, options.validation, options.validation_source or "a validation record given by the examiner")
-    try:
-        shipped = shipped_record()
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        return ErrorRates(f"the record shipped with this release could not be read ({exc})", None)
-    return error_rates(findings, shipped, f"the validation record shipped with forensics {findings.tool.version}")
+        return given_error_rates(findings, options.validation,
+                                 options.validation_source or "a validation record given by the examiner")
+    return shipped_error_rates(findings)
 
 
 def _stylesheet(paper: str) -> str:

@@ -19,7 +19,9 @@ from ..fusion import ALPHA
 from ..output import write_atomic
 from ..plugins import PluginHost, one_line
 from ..synthetic import SyntheticCase
-from .cases import Case, Suite, SuiteError, content_hash, folder_suite, write_synthetic
+from .cases import Case, Suite, SuiteError, content_hash, folder_suite, read_suite, write_synthetic
+from .dependence import authentic_dependence
+from .null_check import null_checks
 from .record import FORMAT, Dataset, ValidationRecord, case_rows, compute_methods, read_record, shipped_record
 from .runner import CaseResult, default_workers, run_cases
 
@@ -27,6 +29,7 @@ SYNTHETIC = "synthetic"
 DEFAULT_SEED = 2026
 DEFAULT_COUNT = 20
 RECORD_NAME = "validation.json"
+THUMBNAILS = "thumbnails"
 
 
 @dataclass(frozen=True)
@@ -78,6 +81,8 @@ def validate(
     params = resolve_params(host, options)
     results = run_cases(suite.cases, host, options, out / "findings", workers, on_done)
     versions = {n: d.spec.version for n, d in host.detectors.items()}
+    rows = case_rows(results)
+    fusion = {"policy": options.fusion, "alpha": ALPHA}
     record = ValidationRecord(
         format=FORMAT,
         created=_now(),
@@ -88,20 +93,23 @@ def validate(
             n_spliced=sum(c.spliced for c in suite.cases), n_authentic=sum(not c.spliced for c in suite.cases),
             failed_intake=sum(r.error is not None for r in results), seed=seed, count=count,
         ),
-        fusion={"policy": options.fusion, "alpha": ALPHA},
+        fusion=fusion,
         detector_params=params,
         methods=compute_methods(results, versions, ALPHA),
         elapsed_s=round(time.perf_counter() - started, 1),
-        cases=case_rows(results),
+        cases=rows,
+        null_checks=null_checks(rows, fusion),
+        dependence=authentic_dependence(rows),
     )
     write_atomic(out / RECORD_NAME, record.to_json().encode("utf-8"))
     from .page import write_page  # matplotlib: loaded only when a page is made
+    from .thumbnails import conviction_thumbnails
 
-    write_page(record, out)
+    write_page(record, out, conviction_thumbnails(record, suite.cases, out / "findings", host, out / THUMBNAILS))
     return record
 
 
 __all__ = [
     "Case", "DEFAULT_COUNT", "DEFAULT_SEED", "RECORD_NAME", "SYNTHETIC", "Suite", "SuiteError", "ValidationRecord",
-    "default_workers", "folder_suite", "read_record", "shipped_record", "synthetic_suite", "validate",
+    "default_workers", "folder_suite", "read_record", "read_suite", "shipped_record", "synthetic_suite", "validate",
 ]

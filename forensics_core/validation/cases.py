@@ -17,6 +17,11 @@ Truth file: ``truth.csv`` in the folder, UTF-8, with a header row::
 pixels. Every other column is a condition tag for the per-condition breakdown
 (empty cells are left out).
 
+Several sets can be measured in one run (:func:`read_suite`): each argument is
+a set, or a parent folder whose descendant folders holding ``truth.csv`` are
+the sets. Every case then carries the condition ``set``, the set's path
+relative to its parent (or its folder name when named directly).
+
 Folder layout, when there is no truth file: subfolders named (in any case)
 ``authentic``, ``au``, ``original``, ``pristine`` or ``real`` hold authentic
 photos, and ``tampered``, ``tp``, ``spliced``, ``forged``, ``fake`` or
@@ -40,6 +45,7 @@ from PIL import Image
 from ..synthetic import SyntheticCase
 
 TRUTH_FILE = "truth.csv"
+SET_CONDITION = "set"
 PHOTO_SUFFIXES = {".jpg", ".jpeg", ".png", ".tif", ".tiff"}
 _SPLICED = {"spliced", "tampered", "forged", "fake", "manipulated", "1", "true"}
 _AUTHENTIC = {"authentic", "original", "pristine", "real", "0", "false"}
@@ -155,17 +161,68 @@ def content_hash(cases: Sequence[Case]) -> str:
     return hashlib.sha256("\n".join(lines).encode()).hexdigest()
 
 
+def _set_cases(root: Path) -> list[Case]:
+    cases = read_truth_file(root) if (root / TRUTH_FILE).is_file() else read_layout(root)
+    if not cases:
+        raise SuiteError(f"{root}: no photos found")
+    return cases
+
+
+def _unique(cases: list[Case]) -> list[Case]:
+    names = [c.name for c in cases]
+    if len(set(names)) == len(names):
+        return cases
+    return [Case(f"{i:05d}_{c.name}", c.path, c.spliced, c.mask, c.conditions) for i, c in enumerate(cases)]
+
+
 def folder_suite(root: Path) -> Suite:
     """A suite read from a folder with ``truth.csv`` or the authentic/tampered layout."""
     if not root.is_dir():
         raise SuiteError(f"{root}: not a folder (and not the name of a built-in suite)")
-    cases = read_truth_file(root) if (root / TRUTH_FILE).is_file() else read_layout(root)
-    if not cases:
-        raise SuiteError(f"{root}: no photos found")
-    names = [c.name for c in cases]
-    if len(set(names)) != len(names):
-        cases = [Case(f"{i:05d}_{c.name}", c.path, c.spliced, c.mask, c.conditions) for i, c in enumerate(cases)]
+    cases = _unique(_set_cases(root))
     return Suite(root.name, str(root.resolve()), cases, content_hash(cases))
+
+
+def _is_set(folder: Path) -> bool:
+    if (folder / TRUTH_FILE).is_file():
+        return True
+    names = {d.name.lower() for d in folder.iterdir() if d.is_dir()}
+    return bool(names & _AUTH_DIRS) and bool(names & _TAMPERED_DIRS)
+
+
+def find_sets(root: Path) -> list[tuple[str, Path]]:
+    """The sets ``root`` names, as ``(set name, folder)``: itself, or every descendant folder holding a truth file.
+
+    A set inside another set belongs to the outer one and is not a set of its own.
+    """
+    if not root.is_dir():
+        raise SuiteError(f"{root}: not a folder (and not the name of a built-in suite)")
+    if _is_set(root):
+        return [(root.name, root)]
+    found = sorted(p.parent for p in root.rglob(TRUTH_FILE) if p.is_file())
+    outermost = [f for f in found if not any(o != f and f.is_relative_to(o) for o in found)]
+    if not outermost:
+        raise SuiteError(f"{root}: no {TRUTH_FILE} and no authentic/ and tampered/ subfolders, nor any set below it")
+    return [(f.relative_to(root).as_posix(), f) for f in outermost]
+
+
+def read_suite(roots: Sequence[Path]) -> Suite:
+    """One suite of every set named by ``roots`` (see :func:`find_sets`), each case tagged with its ``set``.
+
+    With more than one set, case names are prefixed with their set's so that
+    they stay unique.
+    """
+    sets = [s for root in roots for s in find_sets(root)]
+    if len({name for name, _ in sets}) != len(sets):
+        sets = [(folder.resolve().as_posix(), folder) for _, folder in sets]
+    cases = []
+    for name, folder in sets:
+        prefix = f"{name.replace('/', '_')}__" if len(sets) > 1 else ""
+        cases += [Case(prefix + c.name, c.path, c.spliced, c.mask, {**c.conditions, SET_CONDITION: name})
+                  for c in _set_cases(folder)]
+    cases = _unique(cases)
+    name = " + ".join(root.name for root in roots)
+    return Suite(name, "; ".join(str(root.resolve()) for root in roots), cases, content_hash(cases))
 
 
 def write_synthetic(generated: Iterable[tuple[str, SyntheticCase]], folder: Path) -> list[Case]:

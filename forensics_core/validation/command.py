@@ -18,7 +18,7 @@ from . import (
     SYNTHETIC,
     SuiteError,
     default_workers,
-    folder_suite,
+    read_suite,
     synthetic_suite,
     validate,
 )
@@ -29,9 +29,10 @@ console = Console(stderr=True, highlight=False)
 
 
 @click.command("validate")
-@click.argument("suite")
+@click.argument("suites", nargs=-1, required=True)
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
-              help="Output folder: validation.json, validation.html, findings/ and, for the synthetic suite, cases/.")
+              help="Output folder: validation.json, validation.html, findings/, thumbnails/ of the authentic photos "
+                   "convicted and, for the synthetic suite, cases/.")
 @click.option("--detectors", help="Comma-separated detector names (default: all installed).")
 @click.option("--workers", type=click.IntRange(min=1), default=None, help="Worker processes (default: number of cores).")
 @click.option("--seed", type=int, default=DEFAULT_SEED, show_default=True, help="Seed of the synthetic suite.")
@@ -41,16 +42,19 @@ console = Console(stderr=True, highlight=False)
               help="Time limit per detector and photo, seconds.")
 @click.option("--fusion", default="bonferroni", show_default=True, help="Fusion policy for the verdict.")
 @click.pass_context
-def validate_command(ctx, suite, out_dir, detectors, workers, seed, count, timeout, fusion):
-    """Run the detectors over SUITE and write its known error rates.
+def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, timeout, fusion):
+    """Run the detectors over SUITES and write their known error rates in one record.
 
-    SUITE is `synthetic` (every plugin's synthetic photos, generated from
-    --seed; nothing is downloaded) or a folder with a truth.csv, or with
-    authentic/ and tampered/ subfolders and masks (see the README).
+    SUITES is `synthetic` (every plugin's synthetic photos, generated from
+    --seed; nothing is downloaded) or one or more folders: a set (with a
+    truth.csv, or with authentic/ and tampered/ subfolders and masks) or a
+    parent folder whose descendant folders with a truth.csv are the sets
+    (see the README). Every photo gets the condition `set`.
     Per detector and for the fused verdict: ROC AUC with a bootstrap 95%
-    interval, TPR at FPR 1% and 5%, the operating point, per-condition
-    figures, localisation MCC and IoU where masks exist, and how often each
-    detector declined.
+    interval, TPR at FPR 1% and 5%, the operating point, per-condition and
+    per-set figures, localisation MCC and IoU where masks exist, how often
+    each detector declined, and whether its p-values hold on the authentic
+    photos (their empirical CDF and the photos it convicts).
     """
     host: PluginHost = ctx.find_root().command.host
     names = [d.strip() for d in detectors.split(",") if d.strip()] if detectors else None
@@ -62,15 +66,18 @@ def validate_command(ctx, suite, out_dir, detectors, workers, seed, count, timeo
     unknown = sorted(set(names or ()) - set(host.detectors))
     if unknown:
         raise click.BadParameter(f"not installed: {', '.join(unknown)}", param_hint="--detectors")
+    synthetic = SYNTHETIC in suites
+    if synthetic and len(suites) > 1:
+        raise click.BadParameter(f"{SYNTHETIC} is measured on its own, not with folders", param_hint="SUITES")
     try:
-        if suite == SYNTHETIC:
+        if synthetic:
             with console.status(f"generating the synthetic suite (seed {seed}, {count} + {count} per plugin)"):
                 the_suite = synthetic_suite(
                     host, out_dir / "cases", seed, count,
                     on_problem=lambda p: console.print(f"forensics: warning: plugin {p.plugin} could not generate "
                                                        f"synthetic cases: {p.reason}", markup=False))
         else:
-            the_suite = folder_suite(Path(suite))
+            the_suite = read_suite([Path(s) for s in suites])
     except SuiteError as exc:
         console.print(f"forensics: error: {exc}", markup=False, soft_wrap=True)
         ctx.exit(1)
@@ -86,17 +93,22 @@ def validate_command(ctx, suite, out_dir, detectors, workers, seed, count, timeo
             progress.update(task, advance=1, failed=failures)
 
         record = validate(the_suite, out_dir, host, options, workers or default_workers(), done,
-                          seed=seed if suite == SYNTHETIC else None, count=count if suite == SYNTHETIC else None)
+                          seed=seed if synthetic else None, count=count if synthetic else None)
     table = Table(title=f"{record.dataset.name}: {record.dataset.n_spliced} spliced, {record.dataset.n_authentic} authentic")
-    for col in ("method", "AUC (95% CI)", "TPR @ FPR 5%", "TPR / FPR at its rule", "declined"):
+    table.add_column("method", no_wrap=True)
+    for col in ("AUC (95% CI)", "TPR @ FPR 5%", "TPR / FPR at its rule", "declined",
+                "authentic convicted"):
         table.add_column(col)
+    checks = {c.name: c for c in record.null_checks}
     for m in record.methods:
         auc = "—" if m.auc is None else f"{m.auc:.3f}" + (f" ({m.auc_ci[0]:.3f}–{m.auc_ci[1]:.3f})" if m.auc_ci else "")
         t5 = m.tpr_at_fpr["0.05"]
         op = m.operating_point
         declined = (m.declined_spliced.k + m.declined_authentic.k) / max(1, m.n_spliced + m.n_authentic)
+        convicted = checks[m.name].convicted if m.name in checks else None
         table.add_row("fused verdict" if m.name == VERDICT else m.name, auc, "—" if t5 is None else f"{t5:.2f}",
-                      f"{op.tpr.value or 0:.2f} / {op.fpr.value or 0:.2f}", f"{declined:.0%}")
+                      f"{op.tpr.value or 0:.2f} / {op.fpr.value or 0:.2f}", f"{declined:.0%}",
+                      "—" if convicted is None or not convicted.n else f"{convicted.k}/{convicted.n}")
     Console(highlight=False).print(table)
     click.echo(f"{out_dir / RECORD_NAME}\n{out_dir / PAGE_NAME}")
     if failures:

@@ -1,20 +1,23 @@
-"""The HTML page of a validation run: ROC curves and tables, self-contained."""
+"""The HTML page of a validation run: ROC curves, null checks on authentic photos and tables, self-contained."""
 
 from __future__ import annotations
 
 import base64
 import io
+from collections.abc import Mapping
 from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (the backend must be chosen first)
+import numpy as np  # noqa: E402
 from jinja2 import Environment, FunctionLoader, StrictUndefined  # noqa: E402
 
 from ..output import write_atomic  # noqa: E402
 from ..report.render import template_text  # noqa: E402
 from .metrics import BOOTSTRAP_SAMPLES, Rate  # noqa: E402
+from .null_check import NULL_LEVELS, authentic_p_values, convictions, ecdf, pointwise_limit  # noqa: E402
 from .record import VERDICT, MethodMetrics, ValidationRecord  # noqa: E402
 
 PAGE_NAME = "validation.html"
@@ -38,6 +41,10 @@ def roc_svg(methods: list[MethodMetrics]) -> bytes:
     ax.set_xlim(-0.01, 1.01)
     ax.set_ylim(-0.01, 1.01)
     ax.legend(loc="lower right", fontsize=7, frameon=False)
+    return _svg(fig)
+
+
+def _svg(fig) -> bytes:
     fig.tight_layout()
     buf = io.BytesIO()
     # A fixed hash salt and no date keep the SVG identical from run to run.
@@ -45,6 +52,39 @@ def roc_svg(methods: list[MethodMetrics]) -> bytes:
         fig.savefig(buf, format="svg", metadata={"Date": None})
     plt.close(fig)
     return buf.getvalue()
+
+
+def ecdf_svg(p_values: np.ndarray, title: str, level: float | None) -> bytes:
+    """Empirical CDF of authentic photos' p-values against the diagonal, on log axes, as SVG bytes.
+
+    A valid test lies on or below the diagonal; the dashed line is the
+    pointwise 95 % upper limit of the curve of as many uniform p-values.
+    p = 0 is drawn at 1e-300. The share axis stops at half of 1/n, the
+    smallest share n photos can show.
+    """
+    p = np.maximum(np.asarray(p_values, dtype=float), 1e-300)
+    x, y = ecdf(p)
+    low = min(x[0], 0.5 / len(p))
+    grid = np.geomspace(low, 1.0, 240)
+    limit = pointwise_limit(grid, len(p))
+    fig, ax = plt.subplots(figsize=(3.6, 3.3))
+    ax.plot(grid, grid, color="0.6", lw=0.8)
+    ax.plot(grid, np.where(limit > 0, limit, np.nan), color="0.6", lw=0.8, ls="--")
+    ax.step(np.r_[x, 1.0], np.r_[y, 1.0], where="post", color="black", lw=1.4)
+    if level is not None:
+        ax.axvline(level, color="tab:red", lw=0.6)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlim(low, 1.0)
+    ax.set_ylim(0.5 / len(p), 1.05)
+    ax.set_xlabel("p-value t")
+    ax.set_ylabel("share of authentic photos with p ≤ t")
+    ax.set_title(title, fontsize=9)
+    return _svg(fig)
+
+
+def _data_url(data: bytes, mime: str) -> str:
+    return f"data:{mime};base64,{base64.b64encode(data).decode('ascii')}"
 
 
 def _pct(r: Rate) -> str:
@@ -58,16 +98,35 @@ def _num(value: float | None, fmt: str = ".3f") -> str:
     return "—" if value is None else format(value, fmt)
 
 
-def render_page(record: ValidationRecord) -> str:
-    """The page's HTML text (autoescaped; figures inline as data: URLs)."""
+def _p_text(value: float | None) -> str:
+    return "—" if value is None else f"{value:.3g}"
+
+
+def _label(name: str) -> str:
+    return "fused verdict" if name == VERDICT else name
+
+
+def render_page(record: ValidationRecord, thumbnails: Mapping[tuple[str, str], Path] | None = None) -> str:
+    """The page's HTML text (autoescaped; figures and ``thumbnails``, keyed by (photo, detector), inline as data: URLs)."""
     env = Environment(loader=FunctionLoader(template_text), autoescape=True, undefined=StrictUndefined,
                       trim_blocks=True, lstrip_blocks=True)
-    env.filters.update(pct=_pct, num=_num)
-    roc = base64.b64encode(roc_svg(record.methods)).decode("ascii")
-    return env.get_template("validation.html.j2").render(record=record, roc=f"data:image/svg+xml;base64,{roc}",
-                                                         verdict_name=VERDICT, css=template_text("report.css"),
-                                                         bootstrap_samples=BOOTSTRAP_SAMPLES)
+    env.filters.update(pct=_pct, num=_num, p=_p_text, label=_label)
+    level = record.fusion.get("alpha")
+    ecdfs = {}
+    for check in record.null_checks:
+        p = authentic_p_values(record.cases, check.name)
+        if len(p):
+            ecdfs[check.name] = _data_url(ecdf_svg(p, f"{_label(check.name)} ({len(p)} authentic photos)", level),
+                                          "image/svg+xml")
+    thumbs = {key: _data_url(path.read_bytes(), "image/jpeg") for key, path in (thumbnails or {}).items()
+              if path.is_file()}
+    return env.get_template("validation.html.j2").render(
+        record=record, roc=_data_url(roc_svg(record.methods), "image/svg+xml"), verdict_name=VERDICT,
+        css=template_text("report.css"), bootstrap_samples=BOOTSTRAP_SAMPLES, ecdfs=ecdfs,
+        levels=[f"{t:g}" for t in NULL_LEVELS], convictions=convictions(record.cases, record.null_checks),
+        thumbnails=thumbs)
 
 
-def write_page(record: ValidationRecord, folder: Path) -> Path:
-    return write_atomic(folder / PAGE_NAME, render_page(record).encode("utf-8"))
+def write_page(record: ValidationRecord, folder: Path,
+               thumbnails: Mapping[tuple[str, str], Path] | None = None) -> Path:
+    return write_atomic(folder / PAGE_NAME, render_page(record, thumbnails).encode("utf-8"))

@@ -19,14 +19,15 @@ import numpy as np
 
 from ..findings import Status, VerdictLabel
 from .metrics import FPR_TARGETS, Rate, auc_bootstrap_ci, rate, roc_auc, roc_curve, suspicion, tpr_at_fpr
+from .dependence import PairDependence
+from .null_check import VERDICT, NullCheck
 from .runner import CaseResult
 
 FORMAT = "forensics-validation/1"
 SHIPPED = "synthetic.json"
 """The record of the built-in synthetic suite shipped in ``forensics_core/validation/`` (``make validate``)."""
-
-VERDICT = "verdict"
-"""Name under which the fused verdict's figures are recorded, beside the detectors'."""
+SHIPPED_REAL = "real.json"
+"""The record of the real-photo corpus shipped beside it (``make validate-real``)."""
 
 FOUND_IOU = 0.5
 
@@ -118,12 +119,18 @@ class ValidationRecord:
     methods: list[MethodMetrics]
     elapsed_s: float
     cases: list[dict[str, Any]] = field(default_factory=list)
+    null_checks: list[NullCheck] = field(default_factory=list)
+    dependence: list[PairDependence] = field(default_factory=list)
 
     def method(self, name: str) -> MethodMetrics | None:
         return next((m for m in self.methods if m.name == name), None)
 
     def to_json(self) -> str:
-        return json.dumps(asdict(self, dict_factory=_plain), indent=1, ensure_ascii=False, allow_nan=False) + "\n"
+        """The record as indented JSON; a list or mapping of plain values, and each photo's row, on one line."""
+        data = asdict(self, dict_factory=_plain)
+        cases = data.pop("cases")
+        rows = "[\n" + ",\n".join("  " + _dumps(c) for c in cases) + "\n ]" if cases else "[]"
+        return f'{_indented(data)[:-2]},\n "cases": {rows}\n}}\n'
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> ValidationRecord:
@@ -146,7 +153,26 @@ class ValidationRecord:
                                                         "declined": r(c["declined"])}) for c in m["by_condition"]],
                    "roc": [tuple(p) for p in m["roc"]]})
 
-        return cls(**{**data, "dataset": Dataset(**data["dataset"]), "methods": [method(m) for m in data["methods"]]})
+        return cls(**{**data, "dataset": Dataset(**data["dataset"]), "methods": [method(m) for m in data["methods"]],
+                      "null_checks": [NullCheck.from_dict(c) for c in data.get("null_checks", [])],
+                      "dependence": [PairDependence.from_dict(d) for d in data.get("dependence", [])]})
+
+
+def _dumps(value: Any) -> str:
+    return json.dumps(value, ensure_ascii=False, allow_nan=False)
+
+
+def _indented(value: Any, depth: int = 0) -> str:
+    """JSON text indented by one space per level, but with containers of plain values (e.g. ROC points) on one line."""
+    nested = [v for v in (value.values() if isinstance(value, dict) else value if isinstance(value, list) else ())
+              if isinstance(v, (dict, list))]
+    if not nested:
+        return _dumps(value)
+    pad = " " * (depth + 1)
+    if isinstance(value, dict):
+        items = [f"{pad}{_dumps(k)}: {_indented(v, depth + 1)}" for k, v in value.items()]
+        return "{\n" + ",\n".join(items) + "\n" + " " * depth + "}"
+    return "[\n" + ",\n".join(pad + _indented(v, depth + 1) for v in value) + "\n" + " " * depth + "]"
 
 
 def _plain(items: list[tuple[str, Any]]) -> dict[str, Any]:
@@ -165,9 +191,9 @@ def read_record(path: Path) -> ValidationRecord:
         raise ValueError(f"{path}: malformed validation record ({exc})") from None
 
 
-def shipped_record() -> ValidationRecord | None:
-    """The record shipped with this release, or None when there is none."""
-    resource = files(__package__).joinpath(SHIPPED)
+def shipped_record(name: str = SHIPPED) -> ValidationRecord | None:
+    """The record ``name`` (:data:`SHIPPED` or :data:`SHIPPED_REAL`) shipped with this release, or None when absent."""
+    resource = files(__package__).joinpath(name)
     if not resource.is_file():
         return None
     return ValidationRecord.from_dict(json.loads(resource.read_text(encoding="utf-8")))
@@ -213,13 +239,20 @@ def _method_metrics(name: str, version: str, rows: Sequence[_Row], rule: str) ->
     )
 
 
+IDENTIFYING_VALUES = 8
+"""A condition with more distinct values than this, and than half the photos carrying it, names photos rather
+than groups them (a source path, a camera model per photo): it stays in the per-photo rows only."""
+
+
 def _by_condition(rows: Sequence[_Row]) -> list[ConditionMetrics]:
     values: dict[str, set[str]] = defaultdict(set)
+    carrying: dict[str, int] = defaultdict(int)
     for r in rows:
         for k, v in r.conditions.items():
             values[k].add(v)
+            carrying[k] += 1
     out = []
-    for key in sorted(values):
+    for key in sorted(k for k, v in values.items() if len(v) <= max(IDENTIFYING_VALUES, carrying[k] / 2)):
         for value in sorted(values[key]):
             spl = [r for r in rows if r.spliced and r.conditions.get(key) == value]
             same = [r for r in rows if not r.spliced and r.conditions.get(key) == value]

@@ -60,20 +60,27 @@ def _p(f: DetectorFinding) -> float | None:
     return None if f.nfa is None else min(1.0, f.nfa)
 
 
-def _localise(host: PluginHost, finding: DetectorFinding, truth: np.ndarray) -> tuple[float, float] | None:
+def localise_map(host: PluginHost, finding: DetectorFinding, shape: tuple[int, int]) -> np.ndarray | None:
+    """The boolean ``shape`` map of the pixels ``finding`` flags, from its plugin's ``forensics_localize``.
+
+    None when the plugin does not localise, fails, or answers with another shape.
+    """
     impl = host.implementation("forensics_localize", finding.plugin)
     if impl is None or finding.status is Status.ERROR:
         return None
     try:
-        pred = impl(finding=finding, shape=truth.shape)
+        pred = impl(finding=finding, shape=shape)
     except Exception:
         return None
     if pred is None:
         return None
     pred = np.asarray(pred, dtype=bool)
-    if pred.shape != truth.shape:
-        return None
-    return mcc(pred, truth), iou(pred, truth)
+    return pred if pred.shape == tuple(shape) else None
+
+
+def _localise(host: PluginHost, finding: DetectorFinding, truth: np.ndarray) -> tuple[float, float] | None:
+    pred = localise_map(host, finding, truth.shape)
+    return None if pred is None else (mcc(pred, truth), iou(pred, truth))
 
 
 def analyse_case(case: Case, options: Options, findings_dir: Path) -> CaseResult:

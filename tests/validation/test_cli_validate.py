@@ -49,3 +49,23 @@ def test_bad_suites_and_records_get_one_line(tmp_path, data_dir):
     run = forensics("analyze", data_dir / "exif" / "Canon_40D.jpg", "--out", tmp_path, "--detectors", "metadata",
                     "--validation", bad)
     assert run.returncode == 2 and "Traceback" not in run.stderr and "not a validation record" in run.stderr
+
+
+def test_several_sets_are_measured_in_one_record(tmp_path):
+    import numpy as np
+    from PIL import Image
+
+    for where in ("one", "two"):
+        folder = tmp_path / "corpus" / where
+        folder.mkdir(parents=True)
+        for i in range(2):
+            Image.fromarray(np.full((24, 32), 40 + 60 * i, np.uint8)).save(folder / f"p{i}.png")
+        (folder / "truth.csv").write_text("file,label,mask,source,camera\np0.png,authentic,,a,\np1.png,manipulated,,b,\n")
+    run = forensics("validate", tmp_path / "corpus" / "one", tmp_path / "corpus" / "two", "--out", tmp_path / "o",
+                    "--detectors", "metadata", "--workers", 1)
+    assert run.returncode == 0, run.stderr
+    record = json.loads((tmp_path / "o" / "validation.json").read_text())
+    assert record["dataset"]["name"] == "one + two" and record["dataset"]["n_cases"] == 4
+    assert sorted((c["name"], c["conditions"]["set"]) for c in record["cases"]) == [
+        ("one__p0", "one"), ("one__p1", "one"), ("two__p0", "two"), ("two__p1", "two")]
+    assert {c["name"] for c in record["null_checks"]} == {"metadata", "verdict"}

@@ -1,0 +1,97 @@
+"""Per set and detector: AUC with its interval, detections and false alarms at the verdict's rule, declines.
+
+Reads one or more ``validation.json`` records (``forensics validate``) and
+recomputes the figures from their per-photo rows, so that records of single
+sets (run one by one) and one record of many sets (with the ``set``
+condition) give comparable tables::
+
+    python benchmarks/validation_table.py out/validation-real/validation.json
+    python benchmarks/validation_table.py before/*/validation.json --label before
+
+A detector *convicts* a photo when it drove the verdict: its p-value (or
+``min(1, NFA)``), times the number of detectors that stated a test on that
+photo (Bonferroni), is below the record's level. ``decl`` counts the photos
+on which the detector was inconclusive, skipped or failed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+
+from forensics_core.validation.metrics import auc_bootstrap_ci, roc_auc, suspicion
+
+VERDICT = "verdict"
+
+
+def _set_name(record: dict, case: dict) -> str:
+    return case.get("conditions", {}).get("set") or record["dataset"]["name"]
+
+
+def _rows(record: dict) -> dict[tuple[str, str], list[tuple[bool, float, bool, bool]]]:
+    """(set, method) -> per photo: (manipulated, suspicion, convicted, declined)."""
+    alpha = float(record["fusion"]["alpha"])
+    out: dict[tuple[str, str], list[tuple[bool, float, bool, bool]]] = defaultdict(list)
+    for case in record["cases"]:
+        if case.get("error"):
+            continue
+        where = _set_name(record, case)
+        tests = {n: d["p_value"] for n, d in case["detectors"].items() if d["status"] == "ok" and d["p_value"] is not None}
+        m = max(1, len(tests))
+        for name, d in case["detectors"].items():
+            decided = d["status"] == "ok"
+            p = tests.get(name)
+            convicted = p is not None and m * p < alpha
+            out[(where, name)].append((case["spliced"], suspicion(d["p_value"], d["score"], decided), convicted,
+                                       not decided))
+        vp = case.get("verdict_p")
+        out[(where, VERDICT)].append((case["spliced"], suspicion(vp, None, vp is not None),
+                                      case.get("verdict") == "inconsistent", case.get("verdict") == "inconclusive"))
+    return out
+
+
+def table(records: list[dict], label: str) -> list[str]:
+    rows: dict[tuple[str, str], list] = defaultdict(list)
+    for record in records:
+        for key, values in _rows(record).items():
+            rows[key].extend(values)
+    lines = [f"| {label} set | method | AUC (95% CI) | TPR at rule | FPR at rule | declined (manip. / auth.) |",
+             "|---|---|---|---|---|---|"]
+    totals: dict[str, list] = defaultdict(list)
+    for (where, method), values in sorted(rows.items()):
+        totals[method].extend(values)
+        lines.append(_line(where, method, values))
+    for method, values in sorted(totals.items()):
+        lines.append(_line("**all**", method, values))
+    return lines
+
+
+def _line(where: str, method: str, values: list) -> str:
+    spl = [v for v in values if v[0]]
+    aut = [v for v in values if not v[0]]
+    pos = np.array([v[1] for v in spl])
+    neg = np.array([v[1] for v in aut])
+    auc = roc_auc(pos, neg)
+    ci = auc_bootstrap_ci(pos, neg)
+    auc_text = "—" if auc is None else f"{auc:.2f}" + (f" ({ci[0]:.2f}–{ci[1]:.2f})" if ci else "")
+    tpr = f"{sum(v[2] for v in spl)}/{len(spl)}" if spl else "—"
+    fpr = f"{sum(v[2] for v in aut)}/{len(aut)}" if aut else "—"
+    declined = f"{sum(v[3] for v in spl)}/{len(spl)} / {sum(v[3] for v in aut)}/{len(aut)}"
+    return f"| {where} | {method} | {auc_text} | {tpr} | {fpr} | {declined} |"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("records", nargs="+", type=Path, help="validation.json files")
+    parser.add_argument("--label", default="", help="word put before 'set' in the header (e.g. before, after)")
+    args = parser.parse_args()
+    records = [json.loads(p.read_text(encoding="utf-8")) for p in args.records]
+    print("\n".join(table(records, args.label)))
+
+
+if __name__ == "__main__":
+    main()
