@@ -33,28 +33,25 @@ def _camera_jpeg(rgb: np.ndarray, quality: int, amount: float = 0.8, sigma: floa
     return np.asarray(Image.open(io.BytesIO(out.getvalue())).convert("RGB"))
 
 
-def _weak_host(rng, shape, agree):
-    voting = rng.random(shape) < 0.9
-    disagree = rng.random(shape) > agree
-    return voting, disagree
+def _host_with_clump(agree):
+    """Votes of a 60 x 80-block photo agreeing with its phase at ``agree``, and a clump voting 80 % against."""
+    rng = np.random.default_rng(3)
+    voting = rng.random((60, 80)) < 0.9
+    disagree = rng.random(voting.shape) > agree
+    clump = np.zeros(voting.shape, bool)
+    clump[20:34, 30:48] = True
+    disagree[clump] = rng.random(clump.sum()) < 0.8
+    return voting, disagree, clump
 
 
 def test_a_clump_without_the_photo_phase_around_it_is_not_a_region():
     """The photo's phase is barely shown (52 %, as on several camera JPEGs); a clump of 80 % against is not a paste."""
-    rng = np.random.default_rng(3)
-    voting, disagree = _weak_host(rng, (60, 80), 0.52)
-    clump = np.zeros(voting.shape, bool)
-    clump[20:34, 30:48] = True
-    disagree[clump] = rng.random(clump.sum()) < 0.8
+    voting, disagree, _ = _host_with_clump(0.52)
     assert not scan([Question("diagonal", disagree, voting)], 0.01).regions
 
 
 def test_the_same_clump_in_a_photo_with_a_clear_phase_is_a_region():
-    rng = np.random.default_rng(3)
-    voting, disagree = _weak_host(rng, (60, 80), 0.95)
-    clump = np.zeros(voting.shape, bool)
-    clump[20:34, 30:48] = True
-    disagree[clump] = rng.random(clump.sum()) < 0.8
+    voting, disagree, clump = _host_with_clump(0.95)
     regions = scan([Question("diagonal", disagree, voting)], 0.01).regions
     assert regions and (regions[0].blocks & clump).sum() >= 0.8 * regions[0].blocks.sum()
     assert regions[0].ring_agree > 0.9 * regions[0].ring_votes
@@ -65,7 +62,8 @@ def test_a_colour_that_votes_against_everywhere_is_not_a_region():
     while a patch of that colour disagreeing where the colour elsewhere agrees is still found."""
     rng = np.random.default_rng(5)
     shape = (48, 64)
-    voting, disagree = _weak_host(rng, shape, 0.95)
+    voting = rng.random(shape) < 0.9
+    disagree = rng.random(shape) > 0.95
     chroma = rng.normal(size=shape + (2,)) * 0.1
     red = np.zeros(shape, bool)
     red[8:22, 6:24] = True
