@@ -158,9 +158,14 @@ def k1_paper(points_norm: np.ndarray) -> float:
     Returns
     -------
     float
-        ``k1`` (biased towards zero; see the module docstring).
+        ``k1`` (biased towards zero; see the module docstring); NaN for
+        fewer than three points or points that all coincide.
     """
     p = np.asarray(points_norm, dtype=np.float64)
+    if len(p) < 3 or np.ptp(p, axis=0).max() == 0:
+        # Trimmed to the shortest line (sec. 4.3), a line can keep too few
+        # distinct points to bow: the paper's k1 is then undefined.
+        return float("nan")
     normal, d0 = paper_line(p)
     along_normal = p @ normal
     r2 = np.einsum("ij,ij->i", p, p)

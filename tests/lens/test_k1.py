@@ -125,3 +125,8 @@ def test_deterministic():
     rng = np.random.default_rng(11)
     points = vertical_line(0.3, 0.08) + rng.normal(0.0, 0.2 / SCALE, (len(Y), 2))
     assert k1_joint(points, SCALE) == k1_joint(points.copy(), SCALE)
+
+
+def test_paper_k1_is_undefined_for_too_few_or_coincident_points():
+    assert np.isnan(k1_paper(np.zeros((5, 2))))
+    assert np.isnan(k1_paper(np.array([[0.1, 0.2], [0.3, 0.2]])))
