@@ -4,26 +4,33 @@ The method is ZERO (Nikoukhah et al., CVPRW 2019; IPOL 2021), as published:
 zero counts of the 8x8 DCT at every pixel position (:mod:`.zeros`), per-pixel
 votes for a grid origin (:mod:`.votes`), the most voted origin as the main
 grid with its a-contrario test, then regions grown among the pixels voting
-for another grid ("foreign": a piece compressed on its own grid) and, when a
-main grid exists, regions voting for the grid (0, 0) once the photo is
-compressed again at quality 99 in memory, among the pixels that did not vote
-for the main grid ("missing": a piece never compressed with the rest).
-Without a main grid the foreign search covers all 64 grids, so a JPEG piece
-pasted into a never-compressed image is still found.
+for another grid ("foreign": a piece compressed on its own grid). Without a
+main grid the foreign search covers all 64 grids, so a JPEG piece pasted into
+a never-compressed image is still found.
 
-Departures from ZERO, both measured on real photos. The missing-grid test
-is not run by default (``missing_grid``): on authentic camera JPEGs of high
-quality the main grid holds only a fifth of the votes, and compressing again
-at quality 99 flips near-ties to (0, 0) in whole textured areas, so ZERO's
-test reports "missing" regions at NFA down to 1e-600 on authentic photos
-(with ZERO's own code on 9 of the first 58 MICC-F220 originals; with this
-one on 13 of 16 authentic JPEGs of the corpus once saved as PNG). When asked
-for, it runs only on files stored losslessly: in a JPEG file every pixel went
-through the file's own compression on the grid (0, 0), so no region can have
-escaped it. For the same reason, in a JPEG file the grid (0, 0) is never
-searched as a foreign grid: authentic photos cropped off-grid and saved again
-at quality 98 keep the old grid as main grid, and the file's own grid then
-forms "foreign" regions over much of the frame.
+Where the main grid is missing ("missing": a piece never compressed with the
+rest) is not tested by default (``missing_grid``). ZERO compresses the photo
+again at quality 99 and looks for regions voting for the new grid; its null
+fails on real photos: on authentic camera JPEGs of high quality the main grid
+holds only a fifth of the votes, and the new compression takes over whole
+textured areas (NFA down to 1e-600; with ZERO's own code on 9 of the first 58
+MICC-F220 originals). It stays available (``missing_method="zero_q99"``,
+lossless files only). The other method (``missing_method="lattice"``, the
+one used when ``missing_grid`` is set) reads the absence on the quantisation
+lattice itself (:mod:`.lattice`): an untouched block's DCT coefficients on
+the main grid sit on multiples of the compression's steps, and a piece that
+never went through that compression does not; in a JPEG file the same
+reading finds the lattice of a compression before the file's own (aligned
+double compression). On the shared real corpus it finds 14 of the 36
+real-world edits (NFA below 10^-2.5), but its region test still gives
+meaningful regions on authentic photos whose history after compression
+varies across the frame (2 to 3 of 217 at the verdict's rule), so it is not
+yet on by default.
+
+In a JPEG file the grid (0, 0) is never searched as a foreign grid:
+authentic photos cropped off-grid and saved again at quality 98 keep the old
+grid as main grid, and the file's own grid then forms "foreign" regions over
+much of the frame.
 """
 
 from __future__ import annotations
@@ -31,6 +38,7 @@ from __future__ import annotations
 import io
 import time
 from collections.abc import Mapping
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -39,6 +47,8 @@ from scipy import ndimage
 
 from forensics_core import DetectorResult, DetectorSpec, Evidence, Status
 
+from .lattice import FREQUENCIES, MIN_FREQUENCIES, block_any, block_coefficients, estimate_steps, missing_regions, \
+    off_lattice
 from .luminance import MIN_SIDE, Luminance, luminance
 from .nfa import finite_log10, log10_binomial_tail, nfa_text
 from .regions import P_VOTE, W, Region, find_regions, log10_n_tests, min_region_pixels
@@ -46,7 +56,7 @@ from .votes import grid_code, grid_origin, vote_map
 from .zeros import ZERO_THRESHOLD, flat_blocks, zero_counts
 
 NAME = "jpeg_grid"
-VERSION = "2.0.0"
+VERSION = "2.1.0"
 
 REFERENCES = (
     "T. Nikoukhah, J. Anger, T. Ehret, M. Colom, J.-M. Morel, R. Grompone von Gioi, JPEG Grid Detection based on "
@@ -61,6 +71,7 @@ REFERENCES = (
 
 DEFAULT_PARAMS: dict[str, Any] = {
     "missing_grid": False,
+    "missing_method": "lattice",
     "recompress_quality": 99,
     "nfa_threshold": 1.0,
     "cell": 8,
@@ -179,6 +190,64 @@ def _recompressed(y: np.ndarray, quality: int) -> np.ndarray:
         return np.asarray(img, dtype=np.float32)
 
 
+def _lattice_stage(lum: Luminance, main: int, details: dict[str, Any], cell: int) -> list:
+    """Regions off the main grid's quantisation lattice (:mod:`.lattice`), as ``(stage, region, tiles())``.
+
+    A lossless file is read on its main grid; a JPEG file on the grid (0, 0)
+    when its main grid is there too, for the lattice of a compression before
+    the file's own (aligned double compression). Anything else, or no
+    lattice on enough frequencies, leaves the test not applicable.
+    """
+    origin = grid_origin(main)
+    if lum.jpeg:
+        usable_source = lum.source in ("jpeg_y", "jpeg_grey") and origin == (0, 0) and lum.table is not None
+        y, file_steps = lum.y, lum.table
+    else:
+        usable_source = lum.fine is not None
+        y, file_steps = lum.fine, None
+    record: dict[str, Any] = {"method": "lattice", "applicable": False, "origin": list(origin),
+                              "reading": "earlier compression under the file's own" if lum.jpeg else "main grid"}
+    details["lattice"] = record
+    if not usable_source:
+        record["reason"] = ("the file's main grid is not its own (0, 0)" if lum.jpeg
+                            else "the pixels are not 8-bit")
+        return []
+    coef = block_coefficients(y, origin)
+    hw = coef.shape[:2]
+    clipped = lum.clipped if lum.clipped is not None else np.zeros(y.shape, bool)
+    usable = ~block_any(clipped, origin, hw)
+    lat = estimate_steps(coef, usable, file_steps)
+    record.update({"steps": lat.steps.tolist(), "n_frequencies": lat.n_frequencies,
+                   "blocks": int(hw[0] * hw[1]), "clipped_blocks": int((~usable).sum())})
+    if lat.n_frequencies < MIN_FREQUENCIES:
+        record["reason"] = (f"a quantisation lattice holds on {lat.n_frequencies} of {int(FREQUENCIES.sum())} "
+                            f"low frequencies (at least {MIN_FREQUENCIES} needed)")
+        return []
+    counts = off_lattice(coef, lat, usable)
+    record.update({"applicable": True, "testable_blocks": int(counts.testable.sum()),
+                   "flagged_blocks": int(counts.flagged.sum())})
+    details["missing_tested"] = True
+    dx, dy = origin
+    found = []
+    for mr in missing_regions(counts, coef[:, :, 0, 0] / 8.0 + 128.0):
+        rows, cols = np.nonzero(mr.blocks)
+        bbox = (dx + 8 * int(cols.min()), dy + 8 * int(rows.min()), dx + 8 * int(cols.max()) + 7,
+                dy + 8 * int(rows.max()) + 7)
+        region = Region(label=-1, grid=main, n_pixels=64 * mr.n_flagged, bbox=bbox, log10_nfa=mr.log10_nfa)
+        found.append(("missing", region, partial(_block_tiles, mr.blocks, origin, lum.y.shape, cell)))
+    return found
+
+
+def _block_tiles(blocks: np.ndarray, origin: tuple[int, int], shape: tuple[int, int], cell: int) -> np.ndarray:
+    """Blocks of the grid at ``origin`` as the map's tiles of ``cell`` pixels (a tile half covered or more)."""
+    dx, dy = origin
+    h, w = blocks.shape
+    pix = np.zeros(shape, np.float32)
+    pix[dy: dy + 8 * h, dx: dx + 8 * w] = np.repeat(np.repeat(blocks, 8, axis=0), 8, axis=1)
+    ht, wt = shape[0] // cell, shape[1] // cell
+    return pix[: ht * cell, : wt * cell].reshape(ht, cell, wt, cell).mean(axis=(1, 3)) >= 0.5
+
+
 def _votes_of(y: np.ndarray) -> np.ndarray:
     return vote_map(zero_counts(y), flat_blocks(y))
 
@@ -211,6 +280,13 @@ def _summary(details: dict[str, Any]) -> str:
     where = (f"a region of {100 * r['area_fraction']:.0f}% of the photo at x {r['bbox_px'][0]}-{r['bbox_px'][2]}, "
              f"y {r['bbox_px'][1]}-{r['bbox_px'][3]}")
     if r["stage"] == "missing":
+        if details.get("lattice", {}).get("applicable"):
+            history = ("the compression before the file's own" if details["lattice"]["reading"].startswith("earlier")
+                       else "the main grid's compression")
+            return (f"{lead}; in {where} the blocks' cosine coefficients lie off the quantisation steps of {history} "
+                    f"far more often than in blocks of the same brightness and detail elsewhere (NFA "
+                    f"{nfa_text(r['log10_nfa'])}){more}: that piece did not go through the compression the rest "
+                    f"went through, as a piece pasted, painted or cloned off the block grid does.{crop}")
         return (f"{lead}; the main grid is missing from {where} (NFA {nfa_text(r['log10_nfa'])}){more}: once the "
                 f"photo is compressed again, its pixels take the new grid where the rest keep the old one, as a piece "
                 f"pasted from an uncompressed source does.{crop}")
@@ -302,22 +378,27 @@ def analyse_luminance(lum: Luminance, params: Mapping[str, Any]) -> DetectorResu
         # quarter to four fifths of the frame), the region has the file's history, not a foreign one.
         others[grid_code(0, 0)] = False
     labels, regions = find_regions(votes, others, log_nt)
-    found = [("foreign", labels, r) for r in regions]
+    # Tiles are drawn only for the regions listed: (stage, region, tiles()).
+    found = [("foreign", r, partial(_region_tiles, labels, r, cell)) for r in regions]
     t = _timed(marks, "foreign_regions", t)
-    # A JPEG file's every pixel went through its own compression on the grid (0, 0): none can have escaped it.
-    details["missing_tested"] = bool(significant and params["missing_grid"] and not lum.jpeg)
-    if details["missing_tested"]:
-        again = _votes_of(_recompressed(lum.y, int(params["recompress_quality"])))
-        again[votes == main] = -1
-        labels_q, regions_q = find_regions(again, np.arange(64) == grid_code(0, 0), log_nt)
-        found += [("missing", labels_q, r) for r in regions_q]
+    details["missing_tested"] = False
+    if significant and params["missing_grid"]:
+        if params["missing_method"] == "lattice":
+            found += _lattice_stage(lum, main, details, cell)
+        elif not lum.jpeg:
+            # ZERO's own test; a JPEG file's every pixel went through its compression on the grid (0, 0).
+            details["missing_tested"] = True
+            again = _votes_of(_recompressed(lum.y, int(params["recompress_quality"])))
+            again[votes == main] = -1
+            labels_q, regions_q = find_regions(again, np.arange(64) == grid_code(0, 0), log_nt)
+            found += [("missing", r, partial(_region_tiles, labels_q, r, cell)) for r in regions_q]
         t = _timed(marks, "missing_regions", t)
-    found.sort(key=lambda f: f[2].log10_nfa)
-    meaningful = [f for f in found if f[2].log10_nfa < log10_threshold]
+    found.sort(key=lambda f: f[1].log10_nfa)
+    meaningful = [f for f in found if f[1].log10_nfa < log10_threshold]
     # Without a detection, the strongest candidate is kept to show how far it was from one.
     listed = meaningful[: int(params["max_regions_listed"])] if meaningful else found[:1]
-    details["regions"] = [_region_record(i + 1, stage, r, _region_tiles(lab, r, cell), cell, shape, log10_threshold)
-                          for i, (stage, lab, r) in enumerate(listed)]
+    details["regions"] = [_region_record(i + 1, stage, r, tiles(), cell, shape, log10_threshold)
+                          for i, (stage, r, tiles) in enumerate(listed)]
     details["n_meaningful"] = len(meaningful)
     _timed(marks, "report_data", t)
     details["elapsed_s"] = marks

@@ -48,6 +48,14 @@ class Luminance:
     jpeg : bool
         The file is a JPEG: every pixel went through its compression on the
         grid (0, 0).
+    fine : ndarray, shape (H, W), float64, or None
+        For a file stored losslessly, the luma before rounding (the lattice
+        test reads coefficients to a fraction of a grey level); None for a
+        JPEG, whose ``y`` is already exact.
+    clipped : ndarray, shape (H, W), bool, or None
+        Pixels with a colour channel at (for a JPEG: within a few grey levels
+        of) the ends of its range, where clipping moved them off any
+        quantisation lattice.
     """
 
     y: np.ndarray
@@ -55,6 +63,8 @@ class Luminance:
     note: str
     table: np.ndarray | None
     jpeg: bool = False
+    fine: np.ndarray | None = None
+    clipped: np.ndarray | None = None
 
 
 def _decoded_y(data: bytes) -> tuple[np.ndarray, str] | None:
@@ -79,6 +89,21 @@ def _luma(evidence: Evidence) -> np.ndarray:
     return np.round(np.clip(evidence.luma, 0.0, 1.0) * 255.0).astype(np.float32)
 
 
+# A JPEG decoder clips each colour channel to 0-255; a later compression's
+# ringing moves clipped pixels a few grey levels back inside.
+_JPEG_CLIP_MARGIN = 3
+
+
+def _clipped(evidence: Evidence, margin: int) -> np.ndarray | None:
+    px = evidence.pixels
+    if px.dtype != np.uint8:
+        return None
+    if px.ndim == 3:
+        px = px[..., :3]
+        return ((px <= margin) | (px >= 255 - margin)).any(axis=2)
+    return (px <= margin) | (px >= 255 - margin)
+
+
 def luminance(evidence: Evidence) -> Luminance:
     """The luminance to analyse and the file's luminance quantisation table.
 
@@ -101,8 +126,10 @@ def luminance(evidence: Evidence) -> Luminance:
             y, source = decoded
             note = ("the JPEG's luminance channel exactly as decoded (no colour conversion)"
                     if source == "jpeg_y" else "the greyscale JPEG's decoded channel")
-            return Luminance(y=y, source=source, note=note, table=table, jpeg=True)
+            return Luminance(y=y, source=source, note=note, table=table, jpeg=True,
+                             clipped=_clipped(evidence, _JPEG_CLIP_MARGIN))
         return Luminance(y=_luma(evidence), source="luma", table=table, jpeg=True,
                          note="the BT.601 luma of the decoded pixels, rounded (the JPEG's Y channel was not available)")
-    return Luminance(y=_luma(evidence), source="luma", table=None,
+    fine = np.clip(evidence.luma, 0.0, 1.0) * 255.0 if evidence.pixels.dtype == np.uint8 else None
+    return Luminance(y=_luma(evidence), source="luma", table=None, fine=fine, clipped=_clipped(evidence, 0),
                      note="the BT.601 luma of the stored pixels, rounded to grey levels")

@@ -29,6 +29,24 @@ def _region_rows(regions: list[dict[str, Any]]) -> list[dict[str, Any]]:
     } for r in regions]
 
 
+def _lattice_context(lattice: dict[str, Any] | None) -> dict[str, Any] | None:
+    """What the report says of the quantisation-lattice test (:mod:`.lattice`), or None when it did not run."""
+    if lattice is None:
+        return None
+    steps = [q for row in lattice.get("steps", []) for q in row if q > 0]
+    return {
+        "applicable": lattice["applicable"],
+        "reason": lattice.get("reason", ""),
+        "jpeg": lattice["reading"].startswith("earlier"),
+        "origin": f"({lattice['origin'][0]}, {lattice['origin'][1]})",
+        "n_frequencies": lattice.get("n_frequencies", 0),
+        "steps": f"{min(steps)}-{max(steps)}" if steps else "",
+        "testable": lattice.get("testable_blocks", 0),
+        "flagged": lattice.get("flagged_blocks", 0),
+        "clipped": lattice.get("clipped_blocks", 0),
+    }
+
+
 def _vote_table(shares: list[list[float]], main: list[int]) -> list[list[dict[str, Any]]]:
     return [[{"text": f"{100 * s:.1f}", "main": [dx, dy] == main} for dx, s in enumerate(row)]
             for dy, row in enumerate(shares)]
@@ -63,6 +81,7 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
         "n_tests": nfa_text(details["log10_n_tests"]) if "log10_n_tests" in details else None,
         "min_region_px": details.get("min_region_px"),
         "missing_tested": details.get("missing_tested", False),
+        "lattice": _lattice_context(details.get("lattice")),
         "decision": decision,
         "references": list(REFERENCES),
     }

@@ -99,7 +99,7 @@ def test_region_missing_the_main_grid_is_found_when_asked_for(tmp_path):
     case = synth.make_uncompressed_paste(4, size=(384, 512), quality=85)
     ev = load_evidence(_file(tmp_path, "m.png", case.data))
     assert not any(r["meaningful"] for r in analyse(ev, DEFAULT_PARAMS).details["regions"])
-    result = check_result(analyse(ev, {**DEFAULT_PARAMS, "missing_grid": True}))
+    result = check_result(analyse(ev, {**DEFAULT_PARAMS, "missing_grid": True, "missing_method": "zero_q99"}))
     assert result.details["missing_tested"]
     hits = [r for r in result.details["regions"] if r["meaningful"]]
     assert result.status is Status.OK and hits, result.summary
