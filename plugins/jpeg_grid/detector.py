@@ -9,23 +9,18 @@ main grid the foreign search covers all 64 grids, so a JPEG piece pasted into
 a never-compressed image is still found.
 
 Where the main grid is missing ("missing": a piece never compressed with the
-rest) is not tested by default (``missing_grid``). ZERO compresses the photo
-again at quality 99 and looks for regions voting for the new grid; its null
-fails on real photos: on authentic camera JPEGs of high quality the main grid
-holds only a fifth of the votes, and the new compression takes over whole
-textured areas (NFA down to 1e-600; with ZERO's own code on 9 of the first 58
-MICC-F220 originals). It stays available (``missing_method="zero_q99"``,
-lossless files only). The other method (``missing_method="lattice"``, the
-one used when ``missing_grid`` is set) reads the absence on the quantisation
-lattice itself (:mod:`.lattice`): an untouched block's DCT coefficients on
-the main grid sit on multiples of the compression's steps, and a piece that
-never went through that compression does not; in a JPEG file the same
-reading finds the lattice of a compression before the file's own (aligned
-double compression). On the shared real corpus it finds 14 of the 36
-real-world edits (NFA below 10^-2.5), but its region test still gives
-meaningful regions on authentic photos whose history after compression
-varies across the frame (2 to 3 of 217 at the verdict's rule), so it is not
-yet on by default.
+rest), ZERO compresses the photo again at quality 99 and looks for regions
+voting for the new grid. Its null fails on real photos: on authentic camera
+JPEGs of high quality the main grid holds only a fifth of the votes, and the
+new compression takes over whole textured areas (NFA down to 1e-600; with
+ZERO's own code on 9 of the first 58 MICC-F220 originals). It stays available
+(``missing_method="zero_q99"``, lossless files only). By default the absence
+is read on the quantisation lattice itself (:mod:`.lattice`): an untouched
+block's DCT coefficients on the main grid sit on multiples of the
+compression's steps, whatever the texture or the camera's quality, and a
+piece that never went through that compression does not. In a JPEG file the
+same reading finds the lattice of a compression before the file's own
+(aligned double compression), and a piece compressed only once.
 
 In a JPEG file the grid (0, 0) is never searched as a foreign grid:
 authentic photos cropped off-grid and saved again at quality 98 keep the old
@@ -70,7 +65,7 @@ REFERENCES = (
 )
 
 DEFAULT_PARAMS: dict[str, Any] = {
-    "missing_grid": False,
+    "missing_grid": True,
     "missing_method": "lattice",
     "recompress_quality": 99,
     "nfa_threshold": 1.0,
@@ -218,6 +213,7 @@ def _lattice_stage(lum: Luminance, main: int, details: dict[str, Any], cell: int
     usable = ~block_any(clipped, origin, hw)
     lat = estimate_steps(coef, usable, file_steps)
     record.update({"steps": lat.steps.tolist(), "n_frequencies": lat.n_frequencies,
+                   "on_share": round(float(np.median(lat.share[lat.steps > 0])), 3) if lat.n_frequencies else None,
                    "blocks": int(hw[0] * hw[1]), "clipped_blocks": int((~usable).sum())})
     if lat.n_frequencies < MIN_FREQUENCIES:
         record["reason"] = (f"a quantisation lattice holds on {lat.n_frequencies} of {int(FREQUENCIES.sum())} "

@@ -1,4 +1,4 @@
-"""The quantisation-lattice reading of where the main grid is missing (opt-in), on photos made here."""
+"""The quantisation-lattice reading of where the main grid is missing, on photos made here."""
 
 import io
 
@@ -14,7 +14,6 @@ from forensics_plugins.jpeg_grid.lattice import block_coefficients, estimate_ste
 from forensics_plugins.jpeg_grid.luminance import luminance
 
 SIZE = (384, 512)
-LATTICE = {**DEFAULT_PARAMS, "missing_grid": True, "missing_method": "lattice"}
 # The pasted piece: rows, columns (off the 8x8 grid on purpose).
 PIECE = (slice(131, 259), slice(203, 363))
 
@@ -45,7 +44,7 @@ def _pasted(base, seed):
 def _analyse(tmp_path, name, data):
     path = tmp_path / name
     path.write_bytes(data)
-    return check_result(analyse(load_evidence(path), LATTICE))
+    return check_result(analyse(load_evidence(path), DEFAULT_PARAMS))
 
 
 def _hit_overlaps(result, mask):
@@ -105,6 +104,6 @@ def test_zero_own_missing_grid_test_stays_available(tmp_path):
     case = synth.make_uncompressed_paste(4, size=SIZE, quality=85)
     path = tmp_path / "m.png"
     path.write_bytes(case.data)
-    result = check_result(analyse(load_evidence(path), {**LATTICE, "missing_method": "zero_q99"}))
+    result = check_result(analyse(load_evidence(path), {**DEFAULT_PARAMS, "missing_method": "zero_q99"}))
     assert result.details["missing_tested"] and "lattice" not in result.details
     assert any(r["meaningful"] and r["stage"] == "missing" for r in result.details["regions"])
