@@ -15,7 +15,7 @@ SYSTEM_PACKAGES := libpango-1.0-0 libpangoft2-1.0-0 libharfbuzz-subset0 fonts-de
 VALIDATION ?= out/validation
 REAL ?= ../shared/data/real
 
-.PHONY: demo test validate validate-real bench check-python system-packages clean
+.PHONY: demo test validate validate-real calibrate bench check-python system-packages clean
 
 demo: $(STAMP)
 	$(PY) -m forensics_core analyze $(SAMPLES) --out $(OUT) --case-id DEMO-1 --exhibit-id 1
@@ -41,6 +41,11 @@ validate-real: $(if $(wildcard $(REAL)),$(STAMP))
 	$(PY) -m forensics_core validate "$(REAL)" --out $(OUT)/validation-real && \
 	cp $(OUT)/validation-real/validation.json forensics_core/validation/real.json && \
 	echo "shipped record: forensics_core/validation/real.json; page: $(OUT)/validation-real/validation.html"
+
+# Likelihood-ratio calibrators fitted on the shipped real record (refresh it
+# first with validate-real); the same record gives the same calibrators.
+calibrate: $(STAMP)
+	$(PY) -m forensics_core calibrate forensics_core/validation/real.json --out forensics_core/calibration/real.json
 
 bench: $(STAMP)
 	$(PY) benchmarks/lens.py

@@ -13,7 +13,14 @@ per set and overall:
   the null) and beyond +-3;
 * the image-level p-values: the largest excess of their empirical CDF over
   the diagonal (<= 0 means the test is valid or conservative on this corpus)
-  and the count below 0.01 / 3 (called a splice by the team's rule).
+  and the count below 0.01 / 3 (called a splice by the team's rule);
+* one camera, one k1 (issue 12, item 4): photos grouped by EXIF camera, focal
+  length and pixel size (from each set's ``exif.csv``); for every group with
+  two or more photos where the detector ran, the global k1 of each, their
+  inverse-variance mean and Cochran's homogeneity test ``Q = sum((k1_i -
+  mean)^2 / se_i^2)`` against chi-square with ``n - 1`` degrees of freedom
+  (a small p-value: the stated uncertainties do not cover the spread between
+  photos of one lens at one setting).
 
 With OpenCV installed (it is not a dependency), the number of LSD segments at
 least as long as the detector's minimum is printed beside the detector's line
@@ -40,14 +47,23 @@ SETS = (
 CONVICTION_P = 0.01 / 3
 
 
-def photos(corpus: Path) -> list[tuple[str, Path]]:
+def photos(corpus: Path) -> list[tuple[str, Path, str]]:
+    """(set, path, group) of every authentic photo; group = camera, focal length and pixel size from exif.csv."""
     out = []
     for name in SETS:
         truth = corpus / name / "truth.csv"
         if not truth.exists():
             continue
+        groups = {}
+        exif = corpus / name / "exif.csv"
+        if exif.exists():
+            with exif.open(newline="") as f:
+                for row in csv.DictReader(f):
+                    size = "x".join(sorted((row["width"], row["height"]), key=int, reverse=True))
+                    groups[row["file"]] = f"{row['make']} {row['model']}, {row['focal_length_mm']} mm, {size}"
         with truth.open(newline="") as f:
-            out += [(name, corpus / name / row["file"]) for row in csv.DictReader(f) if row["label"] == "authentic"]
+            out += [(name, corpus / name / row["file"], groups.get(row["file"], ""))
+                    for row in csv.DictReader(f) if row["label"] == "authentic"]
     return out
 
 
@@ -63,19 +79,47 @@ def _lsd_count(luma: np.ndarray, min_length_px: float) -> int | None:
     return int(np.sum(np.hypot(s[:, 2] - s[:, 0], s[:, 3] - s[:, 1]) >= min_length_px))
 
 
-def run_one(item: tuple[str, Path]) -> dict:
+def run_one(item: tuple[str, Path, str]) -> dict:
     from forensics_core.evidence import load_evidence
     from forensics_plugins.lens_distortion.detector import DEFAULT_PARAMS, analyse
 
-    name, path = item
+    name, path, group = item
     luma = load_evidence(path).luma
     result = analyse(luma, DEFAULT_PARAMS)
     lines = result.details["lines"]
+    model = result.details.get("global_model") or {}
     z = [ln["z"] for ln in lines if ln["informative"] and ln["z"] is not None]
     return {
         "set": name, "file": path.name, "status": result.status.value, "p": result.p_value, "z": z,
         "n_lines": len(lines), "lsd": _lsd_count(luma, DEFAULT_PARAMS["min_length_fraction"] * min(luma.shape)),
+        "group": group, "k1": model.get("k1"), "k1_stderr": model.get("k1_stderr"),
     }
+
+
+def _homogeneity(rows: list[dict]) -> None:
+    """Cochran's Q over the global k1 of the photos of each camera, focal length and size."""
+    from scipy import stats
+
+    groups: dict[str, list[dict]] = {}
+    for r in rows:
+        if r["group"] and r["status"] == "ok" and r["k1"] is not None and (r["k1_stderr"] or 0) > 0:
+            groups.setdefault(r["group"], []).append(r)
+    print("one camera, one k1 (Cochran's Q; groups with 2 or more photos where the detector ran):")
+    tested = 0
+    for group, members in sorted(groups.items()):
+        if len(members) < 2:
+            continue
+        tested += 1
+        k = np.array([m["k1"] for m in members])
+        se = np.array([m["k1_stderr"] for m in members])
+        w = 1.0 / se**2
+        mean = float(np.sum(w * k) / np.sum(w))
+        q = float(np.sum(w * (k - mean) ** 2))
+        p = float(stats.chi2.sf(q, len(k) - 1))
+        print(f"  {group:52s} n {len(k):2d}  k1 {mean:+.4f} +- {np.sqrt(1 / np.sum(w)):.4f}  "
+              f"range {k.min():+.4f}..{k.max():+.4f}  median se {np.median(se):.4f}  Q {q:7.2f}  p {p:.3g}")
+    if not tested:
+        print("  no group holds two photos where the detector ran")
 
 
 def _report(label: str, rows: list[dict]) -> None:
@@ -105,6 +149,7 @@ def main() -> None:
     for name in SETS:
         _report(name, [r for r in rows if r["set"] == name])
     _report("all authentic", rows)
+    _homogeneity(rows)
     for r in rows:
         if r["status"] == "ok" and r["p"] < CONVICTION_P:
             print(f"  called a splice: {r['set']}/{r['file']} p = {r['p']:.3g}")
