@@ -38,6 +38,7 @@ from .findings import (
     check_result,
     to_jsonable,
 )
+from .evaluation import evaluate
 from .fusion import POLICY as DEFAULT_FUSION
 from .plugins import PluginHost, one_line
 
@@ -288,6 +289,8 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
     for name in run_order(host, selected):
         done[name] = run_detector(host, name, evidence, params.get(name, {}), options, prior=done)
     findings = [done[name] for name in selected]
+    verdict = fuse(host, options.fusion, findings, evidence)
+    evaluate(findings, verdict, evidence.info)
     return Findings(
         schema_version=SCHEMA_VERSION,
         tool=Tool("forensics", __version__),
@@ -306,7 +309,7 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
         environment=_environment(),
         plugins=host.plugin_records(),
         detectors=findings,
-        verdict=fuse(host, options.fusion, findings, evidence),
+        verdict=verdict,
     )
 
 

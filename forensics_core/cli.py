@@ -40,6 +40,7 @@ from .signing import (
     load_key,
     write_key_files,
 )
+from .calibration.command import calibrate_command
 from .validation.command import validate_command
 
 FORMATS = ("json", "html", "pdf")
@@ -320,6 +321,7 @@ def batch_command(ctx, inputs, out_dir, workers, scheduler, recursive, force, de
 
 
 cli.add_command(validate_command)
+cli.add_command(calibrate_command)
 
 
 @cli.command("plugins")

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
-SCHEMA_VERSION = "1.1"
+SCHEMA_VERSION = "1.2"
 
 
 class Status(str, enum.Enum):
@@ -124,6 +124,7 @@ class DetectorFinding:
     parameters: dict[str, Any]
     elapsed_s: float
     error: str | None = None
+    log10_lr: float | None = None
 
 
 class Role(str, enum.Enum):
@@ -175,6 +176,30 @@ class Verdict:
     alpha: float | None = None
     method: str = ""
     contributions: list[Contribution] = field(default_factory=list)
+    log10_lr: float | None = None
+    likelihood_ratio: LikelihoodRatio | None = None
+
+
+@dataclass
+class LikelihoodRatio:
+    """The evaluative statement: how much more probable the findings are under Hp than under Hd.
+
+    ``log10_lr`` is the fused log10 likelihood ratio from calibrators fitted
+    on validation data (:mod:`forensics_core.calibration`), None when no
+    calibrator applies. ``contributed`` names the detectors whose own LR is
+    not 1; ``uncalibrated`` those that ran without a calibrator (shown, kept
+    out of the LR). ``calibration`` identifies the calibrators and their data;
+    ``relevance`` says in one sentence how far that data resembles this photo.
+    """
+
+    hp: str
+    hd: str
+    log10_lr: float | None
+    verbal: str
+    contributed: list[str] = field(default_factory=list)
+    uncalibrated: list[str] = field(default_factory=list)
+    calibration: dict[str, Any] = field(default_factory=dict)
+    relevance: str = ""
 
 
 @dataclass
@@ -295,6 +320,8 @@ class Findings:
         verdict["contributions"] = [
             Contribution(**{**c, "role": Role(c["role"])}) for c in verdict.get("contributions", [])
         ]
+        if verdict.get("likelihood_ratio"):
+            verdict["likelihood_ratio"] = LikelihoodRatio(**verdict["likelihood_ratio"])
         return cls(
             schema_version=data["schema_version"],
             tool=Tool(**data["tool"]),

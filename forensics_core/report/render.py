@@ -223,6 +223,7 @@ def _summary(findings: Findings) -> dict[str, Any]:
     rows = [
         {"name": f.name, "version": f.version, "status": f.status.value, "status_words": wording.STATUS_WORDS[f.status],
          "score": _num(f.score), "p_value": _num(f.p_value), "nfa": _num(f.nfa), "summary": f.summary, "error": f.error,
+         "lr": "—" if f.log10_lr is None else f"{10.0 ** f.log10_lr:.3g}",
          **role(f.name)}
         for f in findings.detectors
     ]
@@ -244,7 +245,29 @@ def _summary(findings: Findings) -> dict[str, Any]:
         "method": verdict.method,
         "drivers": verdict.drivers,
         "rows": rows,
-        "scale": wording.scale(verdict.alpha) if strength.graded and verdict.alpha is not None else (),
+        "scale": wording.scale() if strength.graded else (),
+        "lr": _lr_summary(verdict),
+    }
+
+
+def _lr_summary(verdict) -> dict[str, Any] | None:
+    """Page 1's evaluative statement: propositions, the fused LR in words, who contributed, the data behind it."""
+    lr = verdict.likelihood_ratio
+    if lr is None:
+        return None
+    cal = lr.calibration
+    sentence = None
+    if lr.log10_lr is not None:
+        sentence = (f"The findings are {wording.lr_words(lr.log10_lr)} if {lr.hp} (Hp) than if {lr.hd} (Hd): "
+                    f"likelihood ratio {10.0 ** lr.log10_lr:.3g}, {lr.verbal}.")
+    cllr = cal.get("cllr_fused")
+    return {
+        "hp": lr.hp, "hd": lr.hd, "sentence": sentence, "verbal": lr.verbal,
+        "contributed": ", ".join(lr.contributed) or "none (every calibrated detector gave LR 1)",
+        "uncalibrated": ", ".join(lr.uncalibrated),
+        "relevance": lr.relevance,
+        "performance": (f"Cross-validated on that data ({cal.get('cross_validation')}), the fused LR's cost Cllr is "
+                        f"{cllr:.2f} (0 for perfect evidence, 1 for none)." if cllr is not None else ""),
     }
 
 

@@ -1,16 +1,13 @@
-"""The words the report uses for outcomes and their strength, and the scale behind them.
+"""The words the report uses for outcomes and for the strength of the evidence.
 
-The outcome is one of the three an examiner may state. Its strength is read
-off a fixed verbal scale that depends only on the numbers the fusion policy
-used, so the words are never stronger than the numbers: a test that did not
-reject the hypothesis of an original gives at most *limited* support to it,
-because not finding a trace is not proof that there is none.
-
-The scale is stated in the report. It grades the verdict's own decision
-p-value (for the default policy the smallest Bonferroni-adjusted p-value; for
-``fisher`` the combined p-value) against the verdict's level; it is not a
-likelihood-ratio scale (such as ENFSI's), since the detectors do not yet
-report likelihood ratios. A policy that states no p-value is not graded.
+The outcome is one of the three an examiner may state, decided by the fusion
+policy at a level fixed in advance (a triage decision). The strength of the
+evidence is a separate statement: the likelihood ratio of the findings for
+two stated propositions (:mod:`..evaluation`), in ENFSI's verbal equivalents
+(ENFSI Guideline for Evaluative Reporting in Forensic Science, 2015). A
+p-value is never graded as support: not rejecting an original is not
+evidence for one, and only a calibrated LR says how much the findings favour
+either proposition.
 """
 
 from __future__ import annotations
@@ -42,25 +39,28 @@ STATUS_WORDS = {
 
 @dataclass(frozen=True)
 class ScaleStep:
-    """One step of the verbal scale: the words and the condition that earns them."""
+    """One step of the verbal scale: the words and the likelihood ratios that earn them."""
 
     words: str
     condition: str
 
 
-# Fixed before any data is seen: the decision level and tenfold and
-# hundredfold stricter ones.
-def scale(alpha: float) -> tuple[ScaleStep, ...]:
-    """The verbal scale for a verdict decided at level ``alpha``."""
-    return (
-        ScaleStep("strong support for manipulation", f"decision p-value below {alpha / 100:g}"),
-        ScaleStep("moderately strong support for manipulation", f"decision p-value below {alpha / 10:g}"),
-        ScaleStep("moderate support for manipulation", f"decision p-value below {alpha:g} (the decision level)"),
-        ScaleStep("limited support for an original",
-                  f"at least one test ran and the decision p-value did not reach {alpha:g}; a test that does not "
-                  "reject cannot prove an original"),
-        ScaleStep("no support either way", "no detector produced a test result"),
-    )
+# ENFSI (2015), for LRs above 1; the same words for support of Hd when the LR
+# is below 1 (its reciprocal in the condition).
+SCALE = (
+    ScaleStep("extremely strong support", "LR 1,000,000 or more"),
+    ScaleStep("very strong support", "LR 10,000 to 1,000,000"),
+    ScaleStep("strong support", "LR 1,000 to 10,000"),
+    ScaleStep("moderately strong support", "LR 100 to 1,000"),
+    ScaleStep("moderate support", "LR 10 to 100"),
+    ScaleStep("weak support", "LR 2 to 10"),
+    ScaleStep("no support for either proposition", "LR between 1/2 and 2"),
+)
+
+
+def scale() -> tuple[ScaleStep, ...]:
+    """The verbal scale the report states (for LRs below 1 the same words apply to Hd, with 1/LR)."""
+    return SCALE
 
 
 @dataclass(frozen=True)
@@ -72,20 +72,18 @@ class Strength:
     graded: bool
 
 
+def lr_words(log10_lr: float) -> str:
+    """'about N times more (or less) probable' for a log10 LR."""
+    lr = 10.0 ** log10_lr
+    if lr >= 1.0:
+        return f"about {lr:.3g} times more probable"
+    return f"about {1.0 / lr:.3g} times less probable"
+
+
 def strength(verdict: Verdict) -> Strength:
-    """Grade the verdict on :func:`scale`; a verdict without a decision p-value and level is not graded."""
-    if verdict.alpha is None:
-        return Strength("not graded", f"the fusion policy {verdict.policy!r} defines no verbal scale", False)
-    steps = scale(verdict.alpha)
-    if verdict.p_value is None:
-        step = steps[4] if verdict.label is VerdictLabel.INCONCLUSIVE else None
-        if step is None:
-            return Strength("not graded", f"the fusion policy {verdict.policy!r} gave no decision p-value", False)
-        return Strength(step.words, step.condition, True)
-    basis = f"decision p-value {verdict.p_value:.3g} under the {verdict.policy} policy"
-    if verdict.label is VerdictLabel.INCONSISTENT:
-        a = verdict.alpha
-        step = steps[0] if verdict.p_value < a / 100 else steps[1] if verdict.p_value < a / 10 else steps[2]
-    else:
-        step = steps[3]
-    return Strength(step.words, basis, True)
+    """The verdict's likelihood ratio in words; not graded when no calibrated LR was computed."""
+    lr = verdict.likelihood_ratio
+    if lr is None or lr.log10_lr is None:
+        return Strength("not evaluated", "no calibrated likelihood ratio: the installed calibrators do not cover "
+                        "these detectors", False)
+    return Strength(lr.verbal, f"fused likelihood ratio {10.0 ** lr.log10_lr:.3g} (log10 {lr.log10_lr:+.2f})", True)

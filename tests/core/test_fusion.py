@@ -5,7 +5,8 @@ from plugin_hosts import fixture_host
 from scipy.stats import combine_pvalues
 
 from forensics_core import Status, VerdictLabel, analyze
-from forensics_core.findings import DetectorFinding, Role
+from forensics_core.calibration import verbal
+from forensics_core.findings import DetectorFinding, LikelihoodRatio, Role
 from forensics_core.fusion import ALPHA, bonferroni, fisher, fisher_p
 from forensics_core.report import wording
 
@@ -58,15 +59,17 @@ def test_fisher_drivers_are_the_fewest_tests_that_reject_alone():
 def test_no_test_is_inconclusive_never_consistent(rule):
     v = rule([finding("meta"), finding("lens", Status.INCONCLUSIVE), finding("x", Status.ERROR)])
     assert v.label is VerdictLabel.INCONCLUSIVE and v.p_value is None and v.drivers == []
-    assert wording.strength(v).words == "no support either way"
+    assert wording.strength(v).words == "not evaluated" and not wording.strength(v).graded
 
 
-def test_the_verbal_scale_grades_the_decision_p_value():
-    assert wording.strength(bonferroni([finding("a", p=1e-9)])).words == "strong support for manipulation"
-    assert wording.strength(bonferroni([finding("a", p=5e-4)])).words == "moderately strong support for manipulation"
-    assert wording.strength(bonferroni([finding("a", p=5e-3)])).words == "moderate support for manipulation"
-    assert wording.strength(bonferroni([finding("a", p=0.5)])).words == "limited support for an original"
-    assert wording.strength(fisher([finding("a", p=5e-3)])).words == "moderate support for manipulation"
+def test_strength_is_the_likelihood_ratio_never_a_graded_p_value():
+    v = bonferroni([finding("a", p=1e-9)])
+    assert wording.strength(v).words == "not evaluated"
+    v.likelihood_ratio = LikelihoodRatio(hp="h", hd="d", log10_lr=1.5, verbal=verbal(1.5))
+    assert wording.strength(v).words == "moderate support for Hp (manipulation)" and wording.strength(v).graded
+    assert wording.lr_words(1.0) == "about 10 times more probable"
+    assert wording.lr_words(-2.0) == "about 100 times less probable"
+    assert all("p-value" not in step.condition for step in wording.scale())
 
 
 def test_the_fusion_policy_is_chosen_by_name(photo):

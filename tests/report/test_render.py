@@ -55,7 +55,8 @@ def test_page_one_is_a_summary_and_every_page_has_case_exhibit_and_page_of(bundl
     first = " ".join(pages[0].split())
     assert "1. Summary" in first and "OUTCOME" in first.upper()
     assert re.search(r"Consistent with an original|Inconsistent with an original|Inconclusive", first)
-    assert "Strength:" in first and "Verbal scale" in first
+    assert "Strength:" in first and "Propositions. Hp:" in first and "Hd:" in first
+    assert "Verbal scale" in " ".join(" ".join(p.split()) for p in pages[:2])
     assert "sectioned" in first and "no_section" in first  # the detector table
     for number, page in enumerate(pages, 1):
         text = " ".join(page.split())

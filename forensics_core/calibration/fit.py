@@ -1,0 +1,220 @@
+"""Fitting calibrators on validation records, with NFI's ``lir``, and measuring them by grouped cross-validation.
+
+Each validation record (``forensics validate``) lists, per photo, its
+ground truth and every detector's status and p-value; that is all a
+calibrator needs, so calibrating never re-analyses a photo.
+
+* Per detector: lir's logistic calibrator (``LogitCalibrator``: logistic
+  regression with balanced classes, whose log-odds is the log LR) on
+  ``x = -log10 p`` of the photos where the detector ran; ELUB bounds from
+  ``lir.algorithms.bayeserror.elub`` on its log10 LRs.
+* Fusion: logistic regression (balanced) on the detectors' bounded log10
+  LRs, a declining detector entering as 0 (LR 1); ELUB bounds again.
+* Performance: Cllr and Cllr_min (lir.metrics) over every calibration photo,
+  declines included as LR 1, each photo's LR computed by calibrators fitted
+  without its scene (``GroupKFold`` over :func:`scene`): copy-move variants of
+  one photo and an edit and its original never straddle folds.
+
+``lir`` (with scikit-learn) is needed only here: ``pip install lir`` or the
+``calibrate`` extra.
+
+References
+----------
+P. Vergeer et al., Science & Justice 56(6), 2016 (ELUB). N. Brümmer, J. du Preez, Computer Speech and Language
+20(2-3), 2006 (Cllr). D. Meuwly, D. Ramos, R. Haraksim, A guideline for the validation of likelihood ratio methods
+used for forensic evidence evaluation, Forensic Science International 276, 2017, pp. 142-153.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from importlib.metadata import version
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import __version__
+from .model import Calibrator, CalibrationError, CalibrationSet, Fusion, feature
+
+FOLDS = 5
+_LN10 = math.log(10.0)
+
+
+@dataclass(frozen=True)
+class Case:
+    """One calibration photo: its scene group, ground truth and each detector's p-value (None: declined)."""
+
+    name: str
+    scene: str
+    hp: bool
+    p_values: dict[str, float | None]
+
+
+def scene(name: str, conditions: dict[str, Any]) -> str:
+    """The scene a photo belongs to, so that its variants never straddle cross-validation folds.
+
+    A ``scene`` condition in the suite wins. Otherwise: MICC-F220 names
+    (``DSC_1535tamp27``, ``DSC_1535_scale``) give their original's stem;
+    edit/original pairs named ``Ixx_...`` give ``Ixx``; anything else is
+    its own scene.
+    """
+    if conditions.get("scene"):
+        return str(conditions["scene"])
+    stem = name.split("__")[-1]
+    prefix = conditions.get("set", "")
+    pair = re.match(r"^(?:forged|original)_(I\d+)_", stem)
+    if pair:
+        return f"{prefix}:{pair.group(1)}"
+    micc = re.match(r"^(.*?)(?:tamp\d+|_scale)", stem)
+    if micc:
+        return f"{prefix}:{micc.group(1)}"
+    return f"{prefix}:{stem}"
+
+
+def read_records(paths: Sequence[Path]) -> tuple[list[Case], list[dict[str, Any]]]:
+    """Cases and dataset descriptions from validation records; :class:`CalibrationError` when unreadable."""
+    cases, datasets = [], []
+    for path in paths:
+        try:
+            record = json.loads(Path(path).read_text(encoding="utf-8"))
+            datasets.append(dict(record["dataset"]))
+            for c in record["cases"]:
+                if c.get("error"):
+                    continue
+                p = {name: (d["p_value"] if d["status"] == "ok" else None) for name, d in c["detectors"].items()}
+                cases.append(Case(name=c["name"], scene=scene(c["name"], c.get("conditions", {})),
+                                  hp=bool(c["spliced"]), p_values=p))
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise CalibrationError(f"cannot read validation record {path}: {exc}") from exc
+    return cases, datasets
+
+
+def _lir():
+    try:
+        import lir.algorithms.bayeserror as bayeserror
+        import lir.metrics as metrics
+        from lir.algorithms.logistic_regression import LogitCalibrator
+        from lir.data.models import LLRData
+    except ImportError as exc:
+        raise CalibrationError("fitting calibrators needs NFI's lir: pip install lir") from exc
+    return LogitCalibrator, bayeserror, metrics, LLRData
+
+
+def _logit_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    """(intercept, slope) of log10 LR = intercept + slope x from lir's logistic calibrator."""
+    LogitCalibrator, *_ = _lir()
+    if len(set(y.tolist())) < 2 or np.ptp(x) == 0:
+        return 0.0, 0.0
+    cal = LogitCalibrator().fit(x, y)
+    return float(cal._logit.intercept_[0]) / _LN10, float(cal._logit.coef_[0, 0]) / _LN10
+
+
+def _elub(llrs: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    _, bayeserror, _, _ = _lir()
+    if len(set(y.tolist())) < 2:
+        return 0.0, 0.0
+    lower, upper = bayeserror.elub(llrs, y)
+    return float(min(lower, 0.0)), float(max(upper, 0.0))
+
+
+def fit_detector(name: str, cases: Sequence[Case]) -> Calibrator:
+    """A detector's calibrator from the cases where it ran; declines counted, not fitted."""
+    ran = [c for c in cases if c.p_values.get(name) is not None]
+    x = np.array([feature(c.p_values[name]) for c in ran], dtype=float)
+    y = np.array([int(c.hp) for c in ran])
+    intercept, slope = _logit_line(x, y)
+    lower, upper = _elub(intercept + slope * x, y) if ran else (0.0, 0.0)
+    declined = [c for c in cases if name in c.p_values and c.p_values[name] is None]
+    return Calibrator(detector=name, intercept=intercept, slope=slope, lower=lower, upper=upper,
+                      n_hp=int(y.sum()), n_hd=int(len(y) - y.sum()),
+                      n_declined_hp=sum(c.hp for c in declined), n_declined_hd=sum(not c.hp for c in declined))
+
+
+def fit_fusion(detectors: Sequence[str], calibrators: dict[str, Calibrator], cases: Sequence[Case]) -> Fusion:
+    """Logistic-regression fusion of the calibrated detectors' log10 LRs."""
+    from sklearn.linear_model import LogisticRegression
+
+    X = np.array([[calibrators[d].log10_lr(c.p_values.get(d)) for d in detectors] for c in cases])
+    y = np.array([int(c.hp) for c in cases])
+    if len(set(y.tolist())) < 2:
+        return Fusion(intercept=0.0, weights={d: 0.0 for d in detectors}, lower=0.0, upper=0.0)
+    model = LogisticRegression(class_weight="balanced").fit(X, y)
+    intercept = float(model.intercept_[0]) / _LN10
+    weights = {d: float(w) / _LN10 for d, w in zip(detectors, model.coef_[0])}
+    fused = intercept + X @ np.array([weights[d] for d in detectors])
+    lower, upper = _elub(fused, y)
+    return Fusion(intercept=intercept, weights=weights, lower=lower, upper=upper)
+
+
+def _fit_all(detectors: Sequence[str], cases: Sequence[Case]) -> tuple[dict[str, Calibrator], Fusion]:
+    calibrators = {d: fit_detector(d, cases) for d in detectors}
+    return calibrators, fit_fusion(detectors, calibrators, cases)
+
+
+def cross_validated(detectors: Sequence[str], cases: Sequence[Case]) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Per detector and fused, each case's log10 LR from calibrators fitted without its scene."""
+    from sklearn.model_selection import GroupKFold
+
+    groups = np.array([c.scene for c in cases])
+    folds = min(FOLDS, len(set(groups.tolist())))
+    per = {d: np.zeros(len(cases)) for d in detectors}
+    fused = np.zeros(len(cases))
+    for train, test in GroupKFold(n_splits=folds).split(np.zeros(len(cases)), groups=groups):
+        calibrators, fusion = _fit_all(detectors, [cases[i] for i in train])
+        for i in test:
+            llrs = {d: calibrators[d].log10_lr(cases[i].p_values.get(d)) for d in detectors}
+            for d in detectors:
+                per[d][i] = llrs[d]
+            fused[i] = fusion.log10_lr(llrs)
+    return per, fused
+
+
+def costs(llrs: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    """(Cllr, Cllr_min) of log10 LRs with labels ``y`` (1: Hp), by lir."""
+    _, _, metrics, LLRData = _lir()
+    data = LLRData(features=np.asarray(llrs, dtype=float), labels=np.asarray(y, dtype=int))
+    return float(metrics.cllr(data)), float(metrics.cllr_min(data))
+
+
+def calibrate(paths: Sequence[Path], detectors: Sequence[str] | None = None) -> CalibrationSet:
+    """Calibrators, fusion and their cross-validated Cllr from validation records.
+
+    Parameters
+    ----------
+    paths : sequence of Path
+        ``validation.json`` records.
+    detectors : sequence of str, optional
+        Detectors to calibrate (default: every detector the records hold).
+
+    Returns
+    -------
+    CalibrationSet
+    """
+    cases, datasets = read_records(paths)
+    if not cases:
+        raise CalibrationError("the validation records hold no photo")
+    names = sorted({d for c in cases for d in c.p_values}) if detectors is None else list(detectors)
+    missing = [d for d in names if not any(d in c.p_values for c in cases)]
+    if missing:
+        raise CalibrationError(f"no result of {', '.join(missing)} in the validation records")
+    y = np.array([int(c.hp) for c in cases])
+    if len(set(y.tolist())) < 2:
+        raise CalibrationError("the validation records need photos under both propositions")
+    calibrators, fusion = _fit_all(names, cases)
+    per, fused = cross_validated(names, cases)
+    scored = {d: replace(calibrators[d], **dict(zip(("cllr", "cllr_min"), costs(per[d], y)))) for d in names}
+    fusion = replace(fusion, **dict(zip(("cllr", "cllr_min"), costs(fused, y))))
+
+    data = {
+        "records": [{k: d.get(k) for k in ("name", "source", "content_sha256", "n_cases", "n_spliced", "n_authentic")}
+                    for d in datasets],
+        "n_hp": int(y.sum()), "n_hd": int(len(y) - y.sum()), "n_scenes": len({c.scene for c in cases}),
+        "cross_validation": f"GroupKFold, {min(FOLDS, len({c.scene for c in cases}))} folds by scene",
+    }
+    tool = {"forensics": __version__, "lir": version("lir"), "scikit-learn": version("scikit-learn")}
+    return CalibrationSet(data=data, tool=tool, calibrators=scored, fusion=fusion)

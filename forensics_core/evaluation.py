@@ -1,0 +1,90 @@
+"""Evaluative reporting: each finding's and the fused likelihood ratio for the stated propositions.
+
+The verdict's label comes from the fusion policy (a triage decision at a
+level fixed in advance); the strength of the evidence is stated separately,
+as a likelihood ratio from calibrators fitted on validation data
+(:mod:`.calibration`; by default the ones shipped with the tool, fitted on the
+real-photo corpus). A detector without a calibrator is shown but kept out of
+the LR; a detector that declined gives LR 1.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import lru_cache
+
+from .calibration import CalibrationSet, load_shipped, verbal
+from .calibration.model import HD, HP
+from .findings import DetectorFinding, EvidenceInfo, LikelihoodRatio, Status, Verdict
+from .fusion import finding_p
+
+# Formats and sizes of the shipped calibration data (the real corpus: camera
+# JPEGs of 0.3-16 megapixels and web edits saved as JPEG or PNG).
+_CALIBRATED_FORMATS = ("JPEG", "PNG")
+_CALIBRATED_MEGAPIXELS = (0.3, 16.0)
+
+
+@lru_cache(maxsize=1)
+def shipped() -> CalibrationSet | None:
+    """The shipped calibrators, read once."""
+    return load_shipped()
+
+
+def _relevance(calibration: CalibrationSet, info: EvidenceInfo) -> str:
+    data = calibration.data
+    sets = ", ".join(r.get("name", "?") for r in data.get("records", []))
+    mp = info.width * info.height / 1e6
+    what = (f"The calibration data are {data.get('n_hp', 0)} manipulated and {data.get('n_hd', 0)} authentic photos "
+            f"({sets}): camera JPEGs, copy-moves and real-world edits saved as JPEG or PNG.")
+    outside = []
+    if info.format not in _CALIBRATED_FORMATS:
+        outside.append(f"its format ({info.format}) is not among them")
+    if not _CALIBRATED_MEGAPIXELS[0] <= mp <= _CALIBRATED_MEGAPIXELS[1]:
+        outside.append(f"its size ({mp:.1f} MP) lies outside theirs ({_CALIBRATED_MEGAPIXELS[0]:g}-"
+                       f"{_CALIBRATED_MEGAPIXELS[1]:g} MP)")
+    if outside:
+        return what + " This photo lies outside them: " + "; ".join(outside) + ", so the LR may not apply to it."
+    return what + f" This photo ({info.format}, {mp:.1f} MP) lies within their formats and sizes."
+
+
+def evaluate(findings: Sequence[DetectorFinding], verdict: Verdict, info: EvidenceInfo,
+             calibration: CalibrationSet | None = None) -> None:
+    """Set each finding's ``log10_lr`` and the verdict's ``log10_lr`` and ``likelihood_ratio``, in place.
+
+    Parameters
+    ----------
+    findings : sequence of DetectorFinding
+    verdict : Verdict
+        From the fusion policy; its label is left as it is.
+    info : EvidenceInfo
+        For the relevance of the calibration data to this photo.
+    calibration : CalibrationSet, optional
+        Default: the shipped calibrators. Without any, nothing is set.
+    """
+    calibration = calibration or shipped()
+    if calibration is None:
+        return
+    p_values = {f.name: (finding_p(f) if f.status is Status.OK else None) for f in findings}
+    llrs = calibration.detector_llrs(p_values)
+    for f in findings:
+        f.log10_lr = None if llrs[f.name] is None else round(llrs[f.name], 4)
+    fused = calibration.fused(llrs)
+    verdict.log10_lr = None if fused is None else round(fused, 4)
+    data = calibration.data
+    verdict.likelihood_ratio = LikelihoodRatio(
+        hp=calibration.propositions.get("hp", HP),
+        hd=calibration.propositions.get("hd", HD),
+        log10_lr=verdict.log10_lr,
+        verbal=verbal(fused) if fused is not None else "not evaluated: no fusion of calibrated detectors",
+        contributed=sorted(n for n, v in llrs.items() if v is not None and abs(v) > 1e-9),
+        uncalibrated=sorted(f.name for f in findings if llrs[f.name] is None and f.status is Status.OK),
+        calibration={
+            "records": [{k: r.get(k) for k in ("name", "content_sha256", "n_cases")} for r in data.get("records", [])],
+            "n_hp": data.get("n_hp"), "n_hd": data.get("n_hd"),
+            "cross_validation": data.get("cross_validation"),
+            "cllr_fused": calibration.fusion.cllr if calibration.fusion else None,
+            "cllr_min_fused": calibration.fusion.cllr_min if calibration.fusion else None,
+            "tool": dict(calibration.tool),
+        },
+        relevance=_relevance(calibration, info),
+    )

@@ -1,0 +1,108 @@
+"""Likelihood-ratio calibrators: applying, fitting with lir, Cllr, ELUB bounds, the CLI; on score sets made here."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from forensics_core.calibration import CalibrationError, Calibrator, Fusion, feature, load, verbal
+from forensics_core.calibration.fit import calibrate, costs, scene
+from forensics_core.calibration.model import CalibrationSet
+from forensics_core.cli import cli
+
+
+def _record(tmp_path, n=40, seed=0, name="r.json"):
+    """A validation record: 'strong' separates the propositions, 'noise' does not, 'shy' always declines."""
+    rng = np.random.default_rng(seed)
+    cases = []
+    for i in range(n):
+        hp = i % 2 == 1
+        strong = float(10.0 ** -rng.uniform(3, 8)) if hp else float(rng.uniform(0.01, 1.0))
+        cases.append({
+            "name": f"set__photo{i // 2}_{'tamp' if hp else 'orig'}{i}", "spliced": hp, "error": None,
+            "conditions": {"set": "made", "scene": f"s{i // 2}"},
+            "detectors": {"strong": {"status": "ok", "p_value": strong},
+                          "noise": {"status": "ok", "p_value": float(rng.uniform())},
+                          "shy": {"status": "inconclusive", "p_value": None}},
+        })
+    path = tmp_path / name
+    path.write_text(json.dumps({"dataset": {"name": "made", "source": "test", "content_sha256": "0" * 64,
+                                            "n_cases": n, "n_spliced": n // 2, "n_authentic": n - n // 2},
+                                "cases": cases}))
+    return path
+
+
+def test_a_calibrator_bounds_caps_and_gives_lr_1_when_the_detector_declines():
+    cal = Calibrator("d", intercept=-0.5, slope=0.4, lower=-1.0, upper=2.0, n_hp=10, n_hd=10)
+    assert cal.log10_lr(None) == 0.0
+    assert cal.log10_lr(1.0) == pytest.approx(-0.5)
+    assert cal.log10_lr(1e-3) == pytest.approx(-0.5 + 1.2)
+    assert cal.log10_lr(1e-300) == 2.0
+    assert feature(0.0) == feature(1e-300) == 30.0 and feature(None) is None
+
+
+def test_fusion_counts_an_absent_or_uncalibrated_detector_as_lr_1():
+    fusion = Fusion(intercept=0.1, weights={"a": 0.5, "b": 1.0}, lower=-1.0, upper=1.5)
+    assert fusion.log10_lr({"a": 1.0}) == pytest.approx(0.6)
+    assert fusion.log10_lr({"a": 4.0, "b": 4.0}) == 1.5
+    cs = CalibrationSet(data={}, tool={}, fusion=fusion,
+                        calibrators={"a": Calibrator("a", 0.0, 1.0, -2.0, 2.0, 5, 5)})
+    llrs = cs.detector_llrs({"a": 0.1, "plugin_x": 1e-9, "b": None})
+    assert llrs["plugin_x"] is None and llrs["a"] == pytest.approx(1.0)
+    assert cs.fused(llrs) == pytest.approx(0.1 + 0.5)
+
+
+def test_cllr_against_values_computed_by_hand():
+    assert costs(np.array([0.0, 0.0]), np.array([0, 1]))[0] == pytest.approx(1.0)
+    # One LR of 10 for Hp and one of 1/10 for Hd: each costs log2(1 + 1/10).
+    assert costs(np.array([1.0, -1.0]), np.array([1, 0]))[0] == pytest.approx(math.log2(1.1))
+    # Misleading in both directions costs log2(1 + 10).
+    assert costs(np.array([-1.0, 1.0]), np.array([1, 0]))[0] == pytest.approx(math.log2(11.0))
+
+
+def test_fitting_is_deterministic_bounded_and_ranks_detectors(tmp_path):
+    path = _record(tmp_path)
+    first, second = calibrate([path]), calibrate([path])
+    assert first.to_json() == second.to_json()
+    strong, noise, shy = (first.calibrators[d] for d in ("strong", "noise", "shy"))
+    assert strong.slope > 0 and strong.cllr < 0.5 and strong.cllr < noise.cllr
+    assert shy.n_declined_hp == 20 and shy.n_declined_hd == 20 and shy.log10_lr(1e-9) == 0.0
+    # ELUB: with 20 photos per side no LR may exceed what one more misleading photo would refute.
+    assert 0.0 < strong.upper < math.log10(40) and -math.log10(40) < strong.lower <= 0.0
+    assert all(strong.lower <= strong.log10_lr(p) <= strong.upper for p in (1.0, 1e-3, 1e-30, 0.0))
+    assert first.fusion.cllr <= noise.cllr
+    assert first.data["n_hp"] == 20 and first.data["n_scenes"] == 20
+
+
+def test_scene_keeps_variants_of_one_photo_together():
+    assert scene("micc_f220__DSC_1535tamp27", {"set": "micc"}) == scene("micc_f220__DSC_1535_scale", {"set": "micc"})
+    assert scene("imd_pairs__forged_I02_dm545yj_0", {"set": "imd"}) == scene("imd_pairs__original_I02_6vzqfn",
+                                                                               {"set": "imd"})
+    assert scene("x__a", {"scene": "s9"}) == "s9"
+
+
+def test_cli_writes_a_loadable_file_and_prints_the_costs(tmp_path):
+    out = tmp_path / "cal.json"
+    result = CliRunner().invoke(cli, ["calibrate", str(_record(tmp_path)), "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "Cllr" in result.output and "fused" in result.output
+    loaded = load(out)
+    assert set(loaded.calibrators) == {"strong", "noise", "shy"} and loaded.fusion is not None
+
+
+def test_cli_bad_record_is_one_line(tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text("{")
+    result = CliRunner().invoke(cli, ["calibrate", str(bad), "--out", str(tmp_path / "c.json")])
+    assert result.exit_code == 2 and len(result.output.strip().splitlines()) == 1
+    with pytest.raises(CalibrationError):
+        load(bad)
+
+
+def test_verbal_equivalents():
+    assert verbal(0.1).startswith("no support")
+    assert verbal(1.5) == "moderate support for Hp (manipulation)"
+    assert verbal(-2.5) == "moderately strong support for Hd (as the camera produced it)"
+    assert verbal(7.0).startswith("extremely strong")
