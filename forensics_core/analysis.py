@@ -38,7 +38,7 @@ from .findings import (
     check_result,
     to_jsonable,
 )
-from .evaluation import evaluate
+from .evaluation import calibration_file, evaluate
 from .fusion import POLICY as DEFAULT_FUSION
 from .plugins import PluginHost, one_line
 
@@ -66,6 +66,9 @@ class Options:
         Per-detector overrides of the default parameters.
     case_id, examiner : str or None
         Case information carried into the findings.
+    calibration : str or None
+        Path of the likelihood-ratio calibrators (``forensics calibrate``);
+        None for those shipped with the tool.
     """
 
     detectors: Sequence[str] | None = None
@@ -76,6 +79,7 @@ class Options:
     detector_params: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     case_id: str | None = None
     examiner: str | None = None
+    calibration: str | None = None
 
 
 def _now() -> str:
@@ -290,7 +294,7 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
         done[name] = run_detector(host, name, evidence, params.get(name, {}), options, prior=done)
     findings = [done[name] for name in selected]
     verdict = fuse(host, options.fusion, findings, evidence)
-    evaluate(findings, verdict, evidence.info)
+    evaluate(findings, verdict, evidence.info, calibration_file(options.calibration))
     return Findings(
         schema_version=SCHEMA_VERSION,
         tool=Tool("forensics", __version__),
@@ -305,6 +309,7 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
             "detector_params": params,
             "case_id": options.case_id,
             "examiner": options.examiner,
+            "calibration": options.calibration,
         },
         environment=_environment(),
         plugins=host.plugin_records(),

@@ -40,6 +40,8 @@ from .signing import (
     load_key,
     write_key_files,
 )
+from .calibration import CalibrationError
+from .calibration import load as load_calibration
 from .calibration.command import calibrate_command
 from .validation.command import validate_command
 
@@ -171,6 +173,9 @@ def _run_options(command):
         click.option("--validation", "validation_path", type=click.Path(dir_okay=False, exists=True, path_type=Path),
                      help="validation.json whose error rates the report states (default: the record shipped with "
                           "this release)."),
+        click.option("--calibration", "calibration_path", type=click.Path(dir_okay=False, exists=True, path_type=Path),
+                     help="Likelihood-ratio calibrators (written by `forensics calibrate`) for the findings' LRs "
+                          "(default: those shipped with this release, fitted on the real-photo corpus)."),
     ]
     for option in reversed(options):
         command = option(command)
@@ -179,7 +184,7 @@ def _run_options(command):
 
 def _prepare_run(host: PluginHost, detectors, formats, params, timeout, max_pixels, fusion, isolation, case_id,
                  examiner, exhibit_id, organisation, key_path, paper, tsa_url,
-                 validation_path) -> tuple[Options, ReportSettings | None]:
+                 validation_path, calibration_path) -> tuple[Options, ReportSettings | None]:
     """Check the shared options, load the signing key and warn of unknown detectors.
 
     Raises ``click.BadParameter`` (exit status 2) for wrong usage.
@@ -192,8 +197,14 @@ def _prepare_run(host: PluginHost, detectors, formats, params, timeout, max_pixe
     for text in params:
         det, key, value = _parse_param(text)
         detector_params.setdefault(det, {})[key] = value
+    if calibration_path is not None:
+        try:
+            load_calibration(calibration_path)
+        except CalibrationError as exc:
+            raise click.BadParameter(str(exc), param_hint="--calibration") from None
     options = Options(detectors=_split_list(detectors), timeout_s=timeout, max_pixels=max_pixels, fusion=fusion,
-                      isolation=isolation, detector_params=detector_params, case_id=case_id, examiner=examiner)
+                      isolation=isolation, detector_params=detector_params, case_id=case_id, examiner=examiner,
+                      calibration=str(calibration_path.resolve()) if calibration_path is not None else None)
     try:
         resolve_params(host, options)
     except ValueError as exc:
@@ -227,7 +238,7 @@ def _prepare_run(host: PluginHost, detectors, formats, params, timeout, max_pixe
 @_run_options
 @click.pass_context
 def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params, timeout, max_pixels, fusion, isolation,
-            exhibit_id, organisation, key_path, paper, tsa_url, validation_path):
+            exhibit_id, organisation, key_path, paper, tsa_url, validation_path, calibration_path):
     """Analyse PHOTO... and write OUT/<photo stem>/findings.json for each,
     with the signed report (report.html, report.pdf, manifest.json and its
     signature) beside it.
@@ -238,7 +249,7 @@ def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params,
     host: PluginHost = ctx.find_root().command.host
     options, report = _prepare_run(host, detectors, formats, params, timeout, max_pixels, fusion, isolation, case_id,
                                    examiner, exhibit_id, organisation, key_path, paper, tsa_url,
-                                   validation_path)
+                                   validation_path, calibration_path)
 
     failures = 0
     used: set[str] = set()
@@ -286,7 +297,7 @@ def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params,
 @click.pass_context
 def batch_command(ctx, inputs, out_dir, workers, scheduler, recursive, force, detectors, formats, case_id, examiner,
                   params, timeout, max_pixels, fusion, isolation, exhibit_id, organisation, key_path, paper, tsa_url,
-                  validation_path):
+                  validation_path, calibration_path):
     """Analyse every photo under INPUT... (files and folders) as `analyze`
     does, on local worker processes or a Dask cluster, with a progress bar and
     OUT/summary.csv and OUT/summary.json at the end.
@@ -303,7 +314,7 @@ def batch_command(ctx, inputs, out_dir, workers, scheduler, recursive, force, de
     host: PluginHost = ctx.find_root().command.host
     options, report = _prepare_run(host, detectors, formats, params, timeout, max_pixels, fusion, isolation, case_id,
                                    examiner, exhibit_id, organisation, key_path, paper, tsa_url,
-                                   validation_path)
+                                   validation_path, calibration_path)
     settings = Settings(options)
     if report is not None:
         settings = Settings(options, report.formats, report.options, report.organisation, report.tsa_url,

@@ -12,8 +12,9 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from functools import lru_cache
+from pathlib import Path
 
-from .calibration import CalibrationSet, load_shipped, verbal
+from .calibration import CalibrationSet, load, load_shipped, verbal
 from .calibration.model import HD, HP
 from .findings import DetectorFinding, EvidenceInfo, LikelihoodRatio, Status, Verdict
 from .fusion import finding_p
@@ -28,6 +29,12 @@ _CALIBRATED_MEGAPIXELS = (0.3, 16.0)
 def shipped() -> CalibrationSet | None:
     """The shipped calibrators, read once."""
     return load_shipped()
+
+
+@lru_cache(maxsize=4)
+def calibration_file(path: str | None) -> CalibrationSet | None:
+    """The calibrators in ``path`` (read once per process), or the shipped ones for None."""
+    return shipped() if path is None else load(Path(path))
 
 
 def _relevance(calibration: CalibrationSet, info: EvidenceInfo) -> str:

@@ -73,6 +73,14 @@ def forensics_analyze(
     The call runs in a child process with a time limit (``--timeout``), so it
     must not rely on state it changes in the parent; it must be deterministic
     for the same input and parameters (fix any random seed).
+
+    Evidential strength: the report states likelihood ratios, and your
+    ``p_value`` (or ``nfa``) becomes one only once your detector is
+    calibrated. Run ``forensics validate SUITE`` over photos of known origin
+    with your detector and the others installed, then ``forensics calibrate
+    validation.json --out cal.json``, and analyse with ``--calibration
+    cal.json``. Until then your finding is shown with its p-value and score
+    but kept out of the fused likelihood ratio (its LR reads "—").
     """
 
 

@@ -53,6 +53,7 @@ class Case:
     scene: str
     hp: bool
     p_values: dict[str, float | None]
+    set: str = ""
 
 
 def scene(name: str, conditions: dict[str, Any]) -> str:
@@ -76,6 +77,19 @@ def scene(name: str, conditions: dict[str, Any]) -> str:
     return f"{prefix}:{stem}"
 
 
+def cases_from_rows(rows: Sequence[dict[str, Any]]) -> list[Case]:
+    """Calibration cases from a validation record's per-photo rows (photos that failed intake left out)."""
+    cases = []
+    for c in rows:
+        if c.get("error"):
+            continue
+        p = {name: (d["p_value"] if d["status"] == "ok" else None) for name, d in c["detectors"].items()}
+        conditions = c.get("conditions", {})
+        cases.append(Case(name=c["name"], scene=scene(c["name"], conditions), hp=bool(c["spliced"]), p_values=p,
+                          set=str(conditions.get("set", ""))))
+    return cases
+
+
 def read_records(paths: Sequence[Path]) -> tuple[list[Case], list[dict[str, Any]]]:
     """Cases and dataset descriptions from validation records; :class:`CalibrationError` when unreadable."""
     cases, datasets = [], []
@@ -83,12 +97,7 @@ def read_records(paths: Sequence[Path]) -> tuple[list[Case], list[dict[str, Any]
         try:
             record = json.loads(Path(path).read_text(encoding="utf-8"))
             datasets.append(dict(record["dataset"]))
-            for c in record["cases"]:
-                if c.get("error"):
-                    continue
-                p = {name: (d["p_value"] if d["status"] == "ok" else None) for name, d in c["detectors"].items()}
-                cases.append(Case(name=c["name"], scene=scene(c["name"], c.get("conditions", {})),
-                                  hp=bool(c["spliced"]), p_values=p))
+            cases += cases_from_rows(record["cases"])
         except (OSError, ValueError, KeyError, TypeError) as exc:
             raise CalibrationError(f"cannot read validation record {path}: {exc}") from exc
     return cases, datasets
@@ -218,3 +227,56 @@ def calibrate(paths: Sequence[Path], detectors: Sequence[str] | None = None) -> 
     }
     tool = {"forensics": __version__, "lir": version("lir"), "scikit-learn": version("scikit-learn")}
     return CalibrationSet(data=data, tool=tool, calibrators=scored, fusion=fusion)
+
+
+def _costs_entry(llrs: np.ndarray, y: np.ndarray) -> dict[str, Any]:
+    n_hp, n_hd = int(y.sum()), int(len(y) - y.sum())
+    if n_hp == 0 or n_hd == 0:
+        return {"n_hp": n_hp, "n_hd": n_hd, "cllr": None, "cllr_min": None, "cllr_cal": None}
+    cllr, cllr_min = costs(llrs, y)
+    return {"n_hp": n_hp, "n_hd": n_hd, "cllr": round(cllr, 4), "cllr_min": round(cllr_min, 4),
+            "cllr_cal": round(cllr - cllr_min, 4)}
+
+
+def performance(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """Cross-validated LR performance of a validation run, per detector and fused, overall and per set.
+
+    Parameters
+    ----------
+    rows : sequence of dict
+        The record's per-photo rows.
+
+    Returns
+    -------
+    dict
+        ``method``; ``all`` and ``per_set`` (set -> name -> ``n_hp``,
+        ``n_hd``, ``cllr``, ``cllr_min``, ``cllr_cal``; only sets holding
+        both propositions); ``llrs`` (name ->
+        ``hp`` and ``hd``: the cross-validated log10 LRs, for Tippett and ECE
+        plots); or ``{"method": ..., "note": why not}`` when they cannot be
+        computed (lir absent, one proposition only).
+    """
+    method = ("log10 LRs of calibrators (lir LogitCalibrator per detector, logistic fusion, ELUB bounds) fitted "
+              f"without the photo's scene ({FOLDS}-fold GroupKFold); declines count as LR 1")
+    cases = cases_from_rows(rows)
+    y = np.array([int(c.hp) for c in cases])
+    if len(set(y.tolist())) < 2:
+        return {"method": method, "note": "the suite needs photos under both propositions"}
+    try:
+        _lir()
+    except CalibrationError as exc:
+        return {"method": method, "note": str(exc)}
+    names = sorted({d for c in cases for d in c.p_values})
+    per, fused = cross_validated(names, cases)
+    series = {**per, "verdict": fused}
+    sets = np.array([c.set for c in cases])
+    out: dict[str, Any] = {"method": method, "all": {n: _costs_entry(v, y) for n, v in series.items()},
+                           "per_set": {}, "llrs": {}}
+    for name in sorted(set(sets.tolist())):
+        sel = sets == name
+        if 0 < y[sel].sum() < sel.sum():
+            out["per_set"][name] = {n: _costs_entry(v[sel], y[sel]) for n, v in series.items()}
+    for n, v in series.items():
+        out["llrs"][n] = {"hp": sorted(round(float(x), 4) for x in v[y == 1]),
+                          "hd": sorted(round(float(x), 4) for x in v[y == 0])}
+    return out

@@ -197,7 +197,7 @@ def command_line(findings: Findings) -> str:
         ("--fusion", str(p.get("fusion"))), ("--timeout", f"{p.get('timeout_s'):g}"),
         ("--max-pixels", str(p.get("max_pixels"))), ("--isolation", str(p.get("isolation"))),
     ]
-    for flag, key in (("--case-id", "case_id"), ("--examiner", "examiner")):
+    for flag, key in (("--case-id", "case_id"), ("--examiner", "examiner"), ("--calibration", "calibration")):
         if p.get(key):
             options.append((flag, str(p[key])))
     for det, params in sorted((p.get("detector_params") or {}).items()):

@@ -83,6 +83,56 @@ def ecdf_svg(p_values: np.ndarray, title: str, level: float | None) -> bytes:
     return _svg(fig)
 
 
+def tippett_svg(llrs: Mapping[str, Mapping[str, list[float]]]) -> bytes:
+    """Tippett plots: per method, the share of Hp (solid) and Hd (dashed) photos whose log10 LR exceeds x."""
+    names = list(llrs)
+    ncols = min(3, len(names))
+    nrows = -(-len(names) // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(2.3 * ncols, 2.2 * nrows), sharey=True, squeeze=False)
+    for ax in axes.ravel()[len(names):]:
+        ax.set_visible(False)
+    for ax, name in zip(axes.ravel(), names):
+        for side, style, colour in (("hp", "-", "tab:red"), ("hd", "--", "tab:blue")):
+            v = np.sort(np.asarray(llrs[name][side], dtype=float))
+            if v.size:
+                x = np.concatenate([[v[0] - 0.5], v, [v[-1] + 0.5]])
+                share = np.concatenate([[1.0], 1.0 - np.arange(1, v.size + 1) / v.size, [0.0]])
+                ax.step(x, share, where="post", ls=style, color=colour, label="Hp" if side == "hp" else "Hd")
+        ax.axvline(0, color="0.7", lw=0.6)
+        ax.set_title(_label(name), fontsize=8)
+        ax.set_xlabel("log10 LR", fontsize=7)
+        ax.tick_params(labelsize=6)
+    for row in axes:
+        row[0].set_ylabel("share above x", fontsize=7)
+    axes[0][0].legend(fontsize=6, frameon=False)
+    return _svg(fig)
+
+
+def ece_svg(llrs: Mapping[str, list[float]], title: str) -> bytes:
+    """Empirical cross-entropy against the prior log10 odds, with the neutral reference (LR 1 everywhere).
+
+    ``ECE = P(Hp) mean_Hp log2(1 + 1 / (LR O)) + P(Hd) mean_Hd log2(1 + LR O)``
+    at prior odds ``O`` (Ramos et al., 2013); below the neutral curve, the
+    LRs help a decision at that prior.
+    """
+    prior = np.linspace(-2.5, 2.5, 101)
+    odds = 10.0 ** prior
+    hp = 10.0 ** np.asarray(llrs["hp"], dtype=float)
+    hd = 10.0 ** np.asarray(llrs["hd"], dtype=float)
+    p_hp = odds / (1.0 + odds)
+    ece = (p_hp * np.log2(1.0 + 1.0 / (hp[None, :] * odds[:, None])).mean(axis=1)
+           + (1.0 - p_hp) * np.log2(1.0 + hd[None, :] * odds[:, None]).mean(axis=1))
+    neutral = p_hp * np.log2(1.0 + 1.0 / odds) + (1.0 - p_hp) * np.log2(1.0 + odds)
+    fig, ax = plt.subplots(figsize=(4.2, 2.8))
+    ax.plot(prior, neutral, color="0.6", ls="--", label="neutral (LR 1)")
+    ax.plot(prior, ece, color="black", label="these LRs")
+    ax.set_xlabel("prior log10 odds of Hp", fontsize=8)
+    ax.set_ylabel("empirical cross-entropy (bits)", fontsize=8)
+    ax.set_title(title, fontsize=8)
+    ax.legend(fontsize=7, frameon=False)
+    return _svg(fig)
+
+
 def _data_url(data: bytes, mime: str) -> str:
     return f"data:{mime};base64,{base64.b64encode(data).decode('ascii')}"
 
@@ -120,11 +170,16 @@ def render_page(record: ValidationRecord, thumbnails: Mapping[tuple[str, str], P
                                           "image/svg+xml")
     thumbs = {key: _data_url(path.read_bytes(), "image/jpeg") for key, path in (thumbnails or {}).items()
               if path.is_file()}
+    lr = record.likelihood_ratios or {}
+    lr_figures = {}
+    if lr.get("llrs"):
+        lr_figures["tippett"] = _data_url(tippett_svg(lr["llrs"]), "image/svg+xml")
+        lr_figures["ece"] = _data_url(ece_svg(lr["llrs"][VERDICT], "fused LR, cross-validated"), "image/svg+xml")
     return env.get_template("validation.html.j2").render(
         record=record, roc=_data_url(roc_svg(record.methods), "image/svg+xml"), verdict_name=VERDICT,
         css=template_text("report.css"), bootstrap_samples=BOOTSTRAP_SAMPLES, ecdfs=ecdfs,
         levels=[f"{t:g}" for t in NULL_LEVELS], convictions=convictions(record.cases, record.null_checks),
-        thumbnails=thumbs)
+        thumbnails=thumbs, lr=lr, lr_figures=lr_figures)
 
 
 def write_page(record: ValidationRecord, folder: Path,

@@ -121,6 +121,8 @@ class ValidationRecord:
     cases: list[dict[str, Any]] = field(default_factory=list)
     null_checks: list[NullCheck] = field(default_factory=list)
     dependence: list[PairDependence] = field(default_factory=list)
+    likelihood_ratios: dict[str, Any] = field(default_factory=dict)
+    """Cross-validated LR performance (:func:`forensics_core.calibration.fit.performance`)."""
 
     def method(self, name: str) -> MethodMetrics | None:
         return next((m for m in self.methods if m.name == name), None)

@@ -2,6 +2,8 @@
 
 import json
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -106,3 +108,41 @@ def test_verbal_equivalents():
     assert verbal(1.5) == "moderate support for Hp (manipulation)"
     assert verbal(-2.5) == "moderately strong support for Hd (as the camera produced it)"
     assert verbal(7.0).startswith("extremely strong")
+
+
+def _analyze(*args):
+    return subprocess.run([sys.executable, "-m", "forensics_core", "analyze", *map(str, args)], capture_output=True,
+                          text=True, timeout=300)
+
+
+def test_findings_carry_each_detectors_and_the_fused_lr_with_their_calibration(photo, tmp_path, validate):
+    out = _analyze(photo, "--out", tmp_path / "shipped", "--format", "json", "--detectors", "jpeg_grid,metadata")
+    assert out.returncode == 0, out.stderr
+    findings = json.loads((tmp_path / "shipped" / "left01" / "findings.json").read_text())
+    validate(findings)
+    lr = findings["verdict"]["likelihood_ratio"]
+    assert lr["calibration"]["records"][0]["name"] == "real" and lr["hp"].startswith("after capture")
+    assert findings["verdict"]["log10_lr"] == lr["log10_lr"] is not None
+    assert all(d["log10_lr"] is not None for d in findings["detectors"])
+    # A calibration file of the examiner's own: a detector it does not cover is shown but stays out of the LR.
+    record = _record(tmp_path)
+    text = record.read_text().replace('"strong"', '"jpeg_grid"')
+    record.write_text(text)
+    own = tmp_path / "own.json"
+    assert CliRunner().invoke(cli, ["calibrate", str(record), "--out", str(own)]).exit_code == 0
+    out = _analyze(photo, "--out", tmp_path / "own", "--format", "json", "--detectors", "jpeg_grid,metadata",
+                   "--calibration", own)
+    assert out.returncode == 0, out.stderr
+    findings = json.loads((tmp_path / "own" / "left01" / "findings.json").read_text())
+    validate(findings)
+    lr = findings["verdict"]["likelihood_ratio"]
+    assert lr["calibration"]["records"][0]["name"] == "made" and "metadata" not in lr["contributed"]
+    assert findings["parameters"]["calibration"] == str(own.resolve())
+    assert {d["name"]: d["log10_lr"] for d in findings["detectors"]}["metadata"] is None
+
+
+def test_a_bad_calibration_file_is_a_usage_error_in_one_line(photo, tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"format": "other"}')
+    out = _analyze(photo, "--out", tmp_path / "o", "--format", "json", "--calibration", bad)
+    assert out.returncode == 2 and "calibration" in out.stderr and "Traceback" not in out.stderr

@@ -65,6 +65,19 @@ def test_record_round_trips_and_is_reproducible(run, tmp_path):
     assert second.cases == [{**c} for c in record.cases]
 
 
+def test_record_measures_cross_validated_likelihood_ratios(run):
+    out, record, _ = run
+    lr = record.likelihood_ratios
+    assert lr["all"]["square"]["n_hp"] == 12 and lr["all"]["square"]["n_hd"] == 12
+    # The squares detector separates most photos: its LRs cost far less than LR 1's 1 bit; the observer never
+    # states a p-value, so its LR is 1 throughout.
+    assert lr["all"]["square"]["cllr"] < 0.6 and lr["all"]["observer"]["cllr"] == pytest.approx(1.0)
+    assert lr["all"][VERDICT]["cllr_min"] <= lr["all"][VERDICT]["cllr"]
+    assert len(lr["llrs"][VERDICT]["hp"]) == 12
+    html = (out / "validation.html").read_text()
+    assert "Cllr_min" in html and "Tippett plots" in html
+
+
 def test_page_has_roc_curves_and_tables(run):
     out, _, _ = run
     html = (out / "validation.html").read_text()
