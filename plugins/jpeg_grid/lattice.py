@@ -16,14 +16,16 @@ null does not depend on the scene's texture, noise or the camera's quality:
 only rounding and clipping move an untouched block off its lattice.
 
 Steps. (1) The DCT of every block on the main grid (``block_coefficients``).
-(2) Per low frequency, the step of an earlier lattice, if any: the step
-whose lattice holds significantly more of the coefficients than a smooth
-(exponential) spread of the same values would put near it
+(2) Per low frequency, the step of an earlier lattice, if any: a step
+whose lattice holds at least 80 % of the coefficients, significantly more
+than the same histogram smoothed over one step would put near it
 (``estimate_steps``; Fan & de Queiroz 2003 estimate steps from the same
 periodicity). (3) Per block, how many of its informative coefficients lie
-off the lattice; a block is off when at least two and at least half do.
-(4) Regions: connected groups of off blocks, tested a-contrario against the
-photo's own rate of off blocks (``missing_regions``).
+off the lattice; a block is flagged when at least two and at least half do
+(``off_lattice``). (4) Regions: square windows of blocks holding more
+flagged blocks than blocks of the same brightness and detail elsewhere in
+the photo, tested a-contrario with the photo's own overdispersion
+(``missing_regions``).
 
 References
 ----------
