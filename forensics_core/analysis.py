@@ -38,7 +38,7 @@ from .findings import (
     check_result,
     to_jsonable,
 )
-from .evaluation import calibration_file, evaluate
+from .evaluation import calibration_file, decide_by_lr, evaluate
 from .fusion import POLICY as DEFAULT_FUSION
 from .plugins import PluginHost, one_line
 
@@ -295,6 +295,7 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
     findings = [done[name] for name in selected]
     verdict = fuse(host, options.fusion, findings, evidence)
     evaluate(findings, verdict, evidence.info, calibration_file(options.calibration))
+    decide_by_lr(verdict)
     return Findings(
         schema_version=SCHEMA_VERSION,
         tool=Tool("forensics", __version__),

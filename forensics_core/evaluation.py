@@ -16,8 +16,8 @@ from pathlib import Path
 
 from .calibration import CalibrationSet, load, load_shipped, verbal
 from .calibration.model import HD, HP
-from .findings import DetectorFinding, EvidenceInfo, LikelihoodRatio, Status, Verdict
-from .fusion import finding_p
+from .findings import DetectorFinding, EvidenceInfo, LikelihoodRatio, Role, Status, Verdict, VerdictLabel
+from .fusion import LR_DECISION_LOG10, LR_POLICY, finding_p
 
 # Formats and sizes of the shipped calibration data (the real corpus: camera
 # JPEGs of 0.3-16 megapixels and web edits saved as JPEG or PNG).
@@ -95,3 +95,29 @@ def evaluate(findings: Sequence[DetectorFinding], verdict: Verdict, info: Eviden
         },
         relevance=_relevance(calibration, info),
     )
+
+
+def decide_by_lr(verdict: Verdict) -> None:
+    """Set the label of a ``likelihood_ratio``-policy verdict from its fused LR, in place (see :mod:`.fusion`)."""
+    if verdict.policy != LR_POLICY:
+        return
+    lr = verdict.likelihood_ratio
+    if lr is None or lr.log10_lr is None:
+        verdict.label = VerdictLabel.INCONCLUSIVE
+        verdict.explanation = "No calibrated likelihood ratio could be computed, so nothing is said either way."
+        return
+    value = 10.0 ** lr.log10_lr
+    if lr.log10_lr >= LR_DECISION_LOG10:
+        verdict.label, side = VerdictLabel.INCONSISTENT, "at or above"
+    elif lr.log10_lr <= -LR_DECISION_LOG10:
+        verdict.label, side = VerdictLabel.CONSISTENT, "at or below"
+    else:
+        verdict.label, side = VerdictLabel.INCONCLUSIVE, "between"
+    bound = f"{10 ** LR_DECISION_LOG10:g}"
+    where = {"at or above": bound, "at or below": f"1/{bound}", "between": f"1/{bound} and {bound}"}[side]
+    verdict.explanation = (f"The fused likelihood ratio, {value:.3g}, is {side} {where}: {lr.verbal}. "
+                           f"Contributing: {', '.join(lr.contributed) or 'no detector'}.")
+    verdict.drivers = list(lr.contributed) if verdict.label is not VerdictLabel.INCONCLUSIVE else []
+    for c in verdict.contributions:
+        if c.detector in verdict.drivers:
+            c.role = Role.DROVE

@@ -32,6 +32,13 @@ p-values first, whose statistic alone already rejects.
 Under either, the photo is called *consistent with an original* only when at
 least one test ran and the combination did not reject; otherwise the verdict
 is *inconclusive*.
+
+``likelihood_ratio``. The label follows the fused likelihood ratio of the
+calibrated detectors (:mod:`.evaluation`), with thresholds fixed here:
+*inconsistent with an original* when LR >= 10 ** :data:`LR_DECISION_LOG10`,
+*consistent* when LR <= 10 ** -LR_DECISION_LOG10, *inconclusive* in between
+or without calibrators. This hook only names the policy; the label is set
+once the likelihood ratios are computed.
 """
 
 from __future__ import annotations
@@ -46,6 +53,8 @@ from .findings import Contribution, DetectorFinding, Role, Status, Verdict, Verd
 
 POLICY = "bonferroni"
 ALPHA = 0.01
+LR_POLICY = "likelihood_ratio"
+LR_DECISION_LOG10 = 2.0
 
 # p-values below this are floored before taking logarithms (Fisher) so that a
 # detector reporting p = 0 gives a finite, still overwhelming, statistic.
@@ -152,7 +161,21 @@ def fisher(findings: Sequence[DetectorFinding], alpha: float = ALPHA) -> Verdict
                    contributions=contributions + idle)
 
 
-POLICIES: dict[str, Callable[[Sequence[DetectorFinding]], Verdict]] = {"bonferroni": bonferroni, "fisher": fisher}
+LR_METHOD = (f"the fused likelihood ratio of the calibrated detectors: inconsistent with an original when it is at least "
+             f"{10 ** LR_DECISION_LOG10:g}, consistent when at most 1/{10 ** LR_DECISION_LOG10:g}, inconclusive in "
+             f"between.")
+
+
+def likelihood_ratio(findings: Sequence[DetectorFinding]) -> Verdict:
+    """The ``likelihood_ratio`` policy before the LRs are known: inconclusive until :mod:`.evaluation` decides."""
+    _, idle = _split(findings)
+    counted = [Contribution(f.name, Role.COUNTED) for f in findings if f.name not in {c.detector for c in idle}]
+    return Verdict(label=VerdictLabel.INCONCLUSIVE, score=None, explanation="No likelihood ratio was computed.",
+                   policy=LR_POLICY, method=LR_METHOD, contributions=counted + idle)
+
+
+POLICIES: dict[str, Callable[[Sequence[DetectorFinding]], Verdict]] = {
+    "bonferroni": bonferroni, "fisher": fisher, LR_POLICY: likelihood_ratio}
 
 
 @hookimpl

@@ -26,6 +26,7 @@ from markupsafe import Markup
 
 from ..evidence import Evidence
 from ..findings import ExifSummary, Findings
+from ..fusion import LR_POLICY
 from ..plugins import PluginHost
 from ..validation.record import ValidationRecord
 from . import images, wording
@@ -235,6 +236,15 @@ def _summary(findings: Findings) -> dict[str, Any]:
         "inconclusive": "The detectors could not test the photo (too little of their trace, or failures); nothing is "
                         "said for or against an original.",
     }[verdict.label.value]
+    if verdict.policy == LR_POLICY:
+        reading = {
+            "consistent": "The findings are far more probable if the photo is as the camera produced it than if content "
+                          "was inserted, moved or removed; this weighs the detectors' traces only.",
+            "inconsistent": "The findings are far more probable if content was inserted, moved or removed than if the "
+                            "photo is as the camera produced it. They do not say who altered the photo, how, or why.",
+            "inconclusive": "The findings do not favour either proposition strongly enough to pass the stated thresholds; "
+                            "nothing is said for or against an original.",
+        }[verdict.label.value]
     return {
         "label": verdict.label.value,
         "outcome": wording.OUTCOME_WORDS[verdict.label],
@@ -242,6 +252,7 @@ def _summary(findings: Findings) -> dict[str, Any]:
         "explanation": verdict.explanation,
         "reading": reading,
         "policy": verdict.policy,
+        "lr_policy": verdict.policy == LR_POLICY,
         "method": verdict.method,
         "drivers": verdict.drivers,
         "rows": rows,

@@ -146,3 +146,32 @@ def test_a_bad_calibration_file_is_a_usage_error_in_one_line(photo, tmp_path):
     bad.write_text('{"format": "other"}')
     out = _analyze(photo, "--out", tmp_path / "o", "--format", "json", "--calibration", bad)
     assert out.returncode == 2 and "calibration" in out.stderr and "Traceback" not in out.stderr
+
+
+@pytest.mark.parametrize("log10_lr, label", [(2.5, "inconsistent"), (-2.0, "consistent"), (1.9, "inconclusive"),
+                                             (None, "inconclusive")])
+def test_the_likelihood_ratio_policy_labels_by_fixed_thresholds(log10_lr, label):
+    from forensics_core.evaluation import decide_by_lr
+    from forensics_core.findings import DetectorFinding, LikelihoodRatio, Status
+    from forensics_core.fusion import likelihood_ratio
+
+    finding = DetectorFinding("a", "1", "p", Status.OK, "s", None, 1e-6, None, {}, {}, 0.1)
+    verdict = likelihood_ratio([finding])
+    assert verdict.label.value == "inconclusive" and "1/100" in verdict.method
+    verdict.likelihood_ratio = LikelihoodRatio(hp="h", hd="d", log10_lr=log10_lr, contributed=["a"],
+                                               verbal=verbal(log10_lr) if log10_lr is not None else "")
+    decide_by_lr(verdict)
+    assert verdict.label.value == label
+    assert verdict.drivers == ([] if label == "inconclusive" else ["a"])
+
+
+def test_analyze_with_the_likelihood_ratio_policy(photo, tmp_path, validate):
+    out = _analyze(photo, "--out", tmp_path / "o", "--format", "json", "--detectors", "jpeg_grid",
+                   "--fusion", "likelihood_ratio")
+    assert out.returncode == 0, out.stderr
+    findings = json.loads((tmp_path / "o" / "left01" / "findings.json").read_text())
+    validate(findings)
+    verdict = findings["verdict"]
+    assert verdict["policy"] == "likelihood_ratio" and "fused likelihood ratio" in verdict["explanation"]
+    # The shipped calibrators cannot support an LR of 100 either way on their data (ELUB), so: inconclusive.
+    assert verdict["label"] == "inconclusive"
