@@ -19,12 +19,6 @@ from .calibration.model import HD, HP
 from .findings import DetectorFinding, EvidenceInfo, LikelihoodRatio, Role, Status, Verdict, VerdictLabel
 from .fusion import LR_DECISION_LOG10, LR_POLICY, finding_p
 
-# Formats and sizes of the shipped calibration data (the real corpus: camera
-# JPEGs of 0.3-16 megapixels and web edits saved as JPEG or PNG).
-_CALIBRATED_FORMATS = ("JPEG", "PNG")
-_CALIBRATED_MEGAPIXELS = (0.3, 16.0)
-
-
 @lru_cache(maxsize=1)
 def shipped() -> CalibrationSet | None:
     """The shipped calibrators, read once."""
@@ -38,20 +32,24 @@ def calibration_file(path: str | None) -> CalibrationSet | None:
 
 
 def _relevance(calibration: CalibrationSet, info: EvidenceInfo) -> str:
+    """One sentence on the calibration data, and whether this photo's format and size lie within theirs."""
     data = calibration.data
-    sets = ", ".join(r.get("name", "?") for r in data.get("records", []))
+    sets = ", ".join(data.get("sets") or [r.get("name", "?") for r in data.get("records", [])])
     mp = info.width * info.height / 1e6
     what = (f"The calibration data are {data.get('n_hp', 0)} manipulated and {data.get('n_hd', 0)} authentic photos "
-            f"({sets}): camera JPEGs, copy-moves and real-world edits saved as JPEG or PNG.")
+            f"({sets}).")
+    formats, span = data.get("formats"), data.get("megapixels")
+    if not formats or not span:
+        return what + " Their formats and sizes are not recorded, so how far they resemble this photo is not known."
     outside = []
-    if info.format not in _CALIBRATED_FORMATS:
-        outside.append(f"its format ({info.format}) is not among them")
-    if not _CALIBRATED_MEGAPIXELS[0] <= mp <= _CALIBRATED_MEGAPIXELS[1]:
-        outside.append(f"its size ({mp:.1f} MP) lies outside theirs ({_CALIBRATED_MEGAPIXELS[0]:g}-"
-                       f"{_CALIBRATED_MEGAPIXELS[1]:g} MP)")
+    if info.format not in formats:
+        outside.append(f"its format ({info.format}) is not among theirs ({', '.join(formats)})")
+    if not span[0] <= mp <= span[1]:
+        outside.append(f"its size ({mp:.1f} MP) lies outside theirs ({span[0]:.2g}-{span[1]:.3g} MP)")
     if outside:
         return what + " This photo lies outside them: " + "; ".join(outside) + ", so the LR may not apply to it."
-    return what + f" This photo ({info.format}, {mp:.1f} MP) lies within their formats and sizes."
+    return (what + f" This photo ({info.format}, {mp:.1f} MP) lies within their formats ({', '.join(formats)}) and "
+                   f"sizes ({span[0]:.2g}-{span[1]:.3g} MP).")
 
 
 def evaluate(findings: Sequence[DetectorFinding], verdict: Verdict, info: EvidenceInfo,

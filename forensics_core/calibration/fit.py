@@ -54,6 +54,8 @@ class Case:
     hp: bool
     p_values: dict[str, float | None]
     set: str = ""
+    format: str | None = None
+    megapixels: float | None = None
 
 
 def scene(name: str, conditions: dict[str, Any]) -> str:
@@ -86,7 +88,7 @@ def cases_from_rows(rows: Sequence[dict[str, Any]]) -> list[Case]:
         p = {name: (d["p_value"] if d["status"] == "ok" else None) for name, d in c["detectors"].items()}
         conditions = c.get("conditions", {})
         cases.append(Case(name=c["name"], scene=scene(c["name"], conditions), hp=bool(c["spliced"]), p_values=p,
-                          set=str(conditions.get("set", ""))))
+                          set=str(conditions.get("set", "")), format=c.get("format"), megapixels=c.get("megapixels")))
     return cases
 
 
@@ -219,10 +221,14 @@ def calibrate(paths: Sequence[Path], detectors: Sequence[str] | None = None) -> 
     scored = {d: replace(calibrators[d], **dict(zip(("cllr", "cllr_min"), costs(per[d], y)))) for d in names}
     fusion = replace(fusion, **dict(zip(("cllr", "cllr_min"), costs(fused, y))))
 
+    sizes = [c.megapixels for c in cases if c.megapixels]
     data = {
         "records": [{k: d.get(k) for k in ("name", "source", "content_sha256", "n_cases", "n_spliced", "n_authentic")}
                     for d in datasets],
         "n_hp": int(y.sum()), "n_hd": int(len(y) - y.sum()), "n_scenes": len({c.scene for c in cases}),
+        "sets": sorted({c.set for c in cases if c.set}),
+        "formats": sorted({c.format for c in cases if c.format}),
+        "megapixels": [min(sizes), max(sizes)] if sizes else None,
         "cross_validation": f"GroupKFold, {min(FOLDS, len({c.scene for c in cases}))} folds by scene",
     }
     tool = {"forensics": __version__, "lir": version("lir"), "scikit-learn": version("scikit-learn")}

@@ -309,6 +309,7 @@ def case_rows(results: Sequence[CaseResult]) -> list[dict[str, Any]]:
     """One compact line per photo for the record, so any figure can be recomputed by hand."""
     return [
         {"name": r.name, "spliced": r.spliced, "sha256": r.sha256, "conditions": r.conditions, "error": r.error,
+         "format": r.format, "megapixels": r.megapixels,
          "verdict": r.verdict.value if r.verdict else None, "verdict_p": r.verdict_p,
          "detectors": {n: {"status": d.status.value, "p_value": d.p_value, "score": d.score, "iou": d.iou}
                        for n, d in sorted(r.detectors.items())}}

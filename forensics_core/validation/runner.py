@@ -46,6 +46,8 @@ class CaseResult:
     verdict_p: float | None
     detectors: dict[str, DetectorOutcome] = field(default_factory=dict)
     error: str | None = None
+    format: str | None = None
+    megapixels: float | None = None
 
 
 # The plugins the workers use: set before the pool forks, so that every worker
@@ -104,6 +106,7 @@ def analyse_case(case: Case, options: Options, findings_dir: Path) -> CaseResult
         base.detectors[f.name] = outcome
     v = findings.verdict
     base.sha256, base.verdict, base.verdict_p = evidence.info.sha256, v.label, v.p_value
+    base.format, base.megapixels = evidence.info.format, round(evidence.info.width * evidence.info.height / 1e6, 3)
     return base
 
 

@@ -175,3 +175,24 @@ def test_analyze_with_the_likelihood_ratio_policy(photo, tmp_path, validate):
     assert verdict["policy"] == "likelihood_ratio" and "fused likelihood ratio" in verdict["explanation"]
     # The shipped calibrators cannot support an LR of 100 either way on their data (ELUB), so: inconclusive.
     assert verdict["label"] == "inconclusive"
+
+
+def test_relevance_says_whether_the_photo_lies_within_the_calibration_data(photo):
+    from forensics_core import load_evidence
+    from forensics_core.evaluation import evaluate
+    from forensics_core.findings import Verdict, VerdictLabel
+
+    info = load_evidence(photo).info
+    mp = info.width * info.height / 1e6
+
+    def relevance(**data):
+        cs = CalibrationSet(data={"n_hp": 3, "n_hd": 4, "sets": ["made"], **data}, tool={}, calibrators={},
+                            fusion=Fusion(0.0, {}, -1.0, 1.0))
+        verdict = Verdict(VerdictLabel.INCONCLUSIVE, None, "x", "bonferroni")
+        evaluate([], verdict, info, cs)
+        return verdict.likelihood_ratio.relevance
+
+    assert "lies within" in relevance(formats=["JPEG"], megapixels=[mp / 2, mp * 2])
+    outside = relevance(formats=["PNG"], megapixels=[mp * 2, mp * 4])
+    assert "outside them" in outside and "format (JPEG)" in outside and "size" in outside
+    assert "not recorded" in relevance()
