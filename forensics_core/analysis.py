@@ -204,6 +204,12 @@ def run_detector(
                                None, None, None, {}, params, 0.0,
                                error=f"no loaded plugin provides detector {name!r} (available: {available}){hint}")
     spec, plugin = registered.spec, registered.plugin
+    fmt = evidence.info.format
+    if spec.formats and fmt not in spec.formats:
+        return DetectorFinding(
+            spec.name, spec.version, plugin, Status.SKIPPED,
+            f"Not applied to a {fmt} file: the detector applies to {', '.join(spec.formats)} files, the formats its "
+            f"null model was checked on.", None, None, None, {"formats": list(spec.formats)}, params, 0.0)
     analyze_impl = host.implementation("forensics_analyze", plugin)
 
     seen = {n: f for n, f in (prior or {}).items() if n in spec.uses}

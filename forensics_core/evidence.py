@@ -11,7 +11,9 @@ import hashlib
 import io
 import os
 import struct
+import threading
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from functools import cached_property
@@ -20,9 +22,18 @@ from pathlib import Path
 import numpy as np
 from PIL import ExifTags, Image, ImageFile, TiffImagePlugin, UnidentifiedImageError
 
-from .findings import EvidenceInfo, ExifSummary, GpsPosition, RawTag
+from .findings import ContainedImage, EvidenceInfo, ExifSummary, GpsPosition, RawTag
 
-ALLOWED_FORMATS = ("JPEG", "PNG", "TIFF")
+try:
+    import pillow_heif
+except ImportError:  # HEIF then reads as "unsupported format"
+    pillow_heif = None
+else:
+    pillow_heif.register_heif_opener()
+
+# Pillow's plugin names; MPO opens through the JPEG plugin. AVIF is Pillow's
+# own (libavif), HEIF comes from pillow-heif (libheif).
+ALLOWED_FORMATS = ("JPEG", "PNG", "TIFF", "WEBP", "AVIF") + (("HEIF",) if pillow_heif else ())
 DEFAULT_MAX_PIXELS = 150_000_000
 _RAW_VALUE_LIMIT = 512
 
@@ -32,6 +43,24 @@ _LUMA = np.array([0.299, 0.587, 0.114])
 
 class EvidenceError(Exception):
     """The file cannot be taken in as evidence; the message is one line for the user."""
+
+
+# Pillow's bomb limit is a module global: every decode of evidence sets it
+# under this lock, so threads (batch, Dask) never see each other's limit.
+_LIMIT_LOCK = threading.RLock()
+
+
+@contextmanager
+def _pixel_limit(max_pixels: int):
+    with _LIMIT_LOCK:
+        previous = Image.MAX_IMAGE_PIXELS
+        Image.MAX_IMAGE_PIXELS = max_pixels
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error", Image.DecompressionBombWarning)
+                yield
+        finally:
+            Image.MAX_IMAGE_PIXELS = previous
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,10 +84,34 @@ class Evidence:
     info: EvidenceInfo
     data: bytes
     pixels: np.ndarray
+    max_pixels: int = 0
 
     @property
     def path(self) -> Path:
         return Path(self.info.path)
+
+    def decoding(self):
+        """Context manager: Pillow decodes inside it under this evidence's pixel limit.
+
+        The limit is the one the photo passed at intake (``--max-pixels``),
+        so a detector decoding the evidence again, or an image of the same
+        size made from it, neither fails on Pillow's own default limit nor
+        escapes the user's.
+        """
+        return _pixel_limit(self.max_pixels or max(DEFAULT_MAX_PIXELS, self.info.width * self.info.height))
+
+    def open_image(self, formats: tuple[str, ...] | None = None) -> Image.Image:
+        """Decode the evidence bytes again with Pillow, under the intake's pixel limit.
+
+        For detectors that need a decoder's own view (a JPEG's Y channel, its
+        quantisation tables) rather than :attr:`pixels`. The caller closes
+        the image (``with evidence.open_image() as img:``). Raises what
+        ``PIL.Image.open`` raises for ``formats`` the file is not.
+        """
+        with self.decoding():
+            img = Image.open(io.BytesIO(self.data), formats=formats)
+            img.load()
+            return img
 
     @cached_property
     def luma(self) -> np.ndarray:
@@ -198,32 +251,72 @@ def _too_many_pixels(max_pixels: int) -> str:
     return f"exceeds the pixel limit of {max_pixels:,} pixels (possible decompression bomb; see --max-pixels)"
 
 
-def _open_checked(data: bytes, max_pixels: int) -> Image.Image:
+def _open_checked(data: bytes, max_pixels: int) -> tuple[Image.Image, list[ContainedImage]]:
     """Open and fully decode ``data``, refusing bombs, truncation and unlisted formats."""
     # Pillow warns (not fails) between MAX_IMAGE_PIXELS and twice that; the
     # limit is checked here on the header, before any pixel is decoded.
-    previous = Image.MAX_IMAGE_PIXELS
-    Image.MAX_IMAGE_PIXELS = max_pixels
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", Image.DecompressionBombWarning)
-            try:
-                img = Image.open(io.BytesIO(data), formats=ALLOWED_FORMATS)
-            except UnidentifiedImageError:
-                with Image.open(io.BytesIO(data)) as probe:
-                    fmt = probe.format
-                raise EvidenceError(
-                    f"unsupported format {fmt}; allowed: {', '.join(ALLOWED_FORMATS)}"
-                ) from None
-            w, h = img.size
-            if w * h > max_pixels:
-                raise EvidenceError(f"{w}x{h}: " + _too_many_pixels(max_pixels))
-            if ImageFile.LOAD_TRUNCATED_IMAGES:
-                raise EvidenceError("refusing to run with Pillow's LOAD_TRUNCATED_IMAGES enabled")
-            img.load()
-            return img
-    finally:
-        Image.MAX_IMAGE_PIXELS = previous
+    with _pixel_limit(max_pixels):
+        try:
+            img = Image.open(io.BytesIO(data), formats=ALLOWED_FORMATS)
+        except UnidentifiedImageError:
+            with Image.open(io.BytesIO(data)) as probe:
+                fmt = probe.format
+            raise EvidenceError(
+                f"unsupported format {fmt}; allowed: {', '.join(ALLOWED_FORMATS)}"
+            ) from None
+        w, h = img.size
+        if w * h > max_pixels:
+            raise EvidenceError(f"{w}x{h}: " + _too_many_pixels(max_pixels))
+        if ImageFile.LOAD_TRUNCATED_IMAGES:
+            raise EvidenceError("refusing to run with Pillow's LOAD_TRUNCATED_IMAGES enabled")
+        others = _other_images(img, max_pixels)
+        img.load()
+        return img, others
+
+
+def _mpo_kind(img: Image.Image, index: int) -> str:
+    entries = (getattr(img, "mpinfo", None) or {}).get(0xB002) or []
+    if index < len(entries):
+        kind = (entries[index].get("Attribute") or {}).get("MPType")
+        if kind:
+            return f"MPO {str(kind).lower()}"
+    return "MPO image"
+
+
+def _other_images(img: Image.Image, max_pixels: int) -> list[ContainedImage]:
+    """Every image in the container but the one analysed; leaves ``img`` on the analysed frame.
+
+    The analysed image is the container's primary one: frame 0, or for HEIF
+    the image the file marks primary. Frames and pages larger than the pixel
+    limit are listed, never decoded.
+    """
+    out: list[ContainedImage] = []
+    n = int(getattr(img, "n_frames", 1) or 1)
+    primary = 0
+    if n > 1:
+        kind = {"TIFF": "page", "HEIF": "HEIF image", "AVIF": "AVIF image"}.get(str(img.format), "frame")
+        for i in range(n):
+            img.seek(i)
+            if img.format == "HEIF" and img.info.get("primary"):
+                primary = i
+            out.append(ContainedImage(i, _mpo_kind(img, i) if img.format == "MPO" else kind, *img.size))
+        img.seek(primary)
+        out = [c for c in out if c.index != primary]
+    if img.format == "HEIF":
+        for key, kind in (("thumbnails", "HEIF thumbnail"), ("depth_images", "HEIF depth image")):
+            for i, item in enumerate(img.info.get(key) or []):
+                size = getattr(item, "size", None) or (item if isinstance(item, tuple) else (None, None))
+                out.append(ContainedImage(i, kind, *(int(v) if v else None for v in size[:2])))
+        for i, name in enumerate(img.info.get("aux") or {}):
+            out.append(ContainedImage(i, f"HEIF auxiliary image ({name})"))
+    return out
+
+
+def _decoder_note(img: Image.Image) -> str | None:
+    if img.format == "HEIF" and img.info.get("original_orientation") not in (None, 1):
+        return (f"libheif applies a HEIF file's rotation and mirror properties when it decodes; the EXIF orientation "
+                f"was {img.info['original_orientation']} and the analysed grid is the image as displayed")
+    return None
 
 
 def _pixel_array(img: Image.Image) -> np.ndarray:
@@ -278,7 +371,7 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
     if not data:
         raise EvidenceError("empty file")
     try:
-        img = _open_checked(data, max_pixels)
+        img, others = _open_checked(data, max_pixels)
     except EvidenceError:
         raise
     except UnidentifiedImageError:
@@ -307,9 +400,11 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
         icc_profile=bool(img.info.get("icc_profile")),
         quantization_tables={str(k): [int(v) for v in table] for k, table in sorted(quant.items())},
         exif=exif,
+        other_images=others,
+        decoder_note=_decoder_note(img),
     )
     try:
         pixels = _pixel_array(img)
     finally:
         img.close()
-    return Evidence(info=info, data=data, pixels=pixels)
+    return Evidence(info=info, data=data, pixels=pixels, max_pixels=max_pixels)

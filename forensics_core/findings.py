@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
-SCHEMA_VERSION = "1.2"
+SCHEMA_VERSION = "1.3"
 
 
 class Status(str, enum.Enum):
@@ -67,6 +67,12 @@ class DetectorSpec:
         ``forensics_analyze``). When both are selected, those run first; when
         one is absent or fails, this detector still runs and must say what
         it could not compare.
+    formats : tuple of str
+        Evidence formats (``EvidenceInfo.format``: ``JPEG``, ``MPO``, ``PNG``,
+        ``TIFF``, ``WEBP``, ``HEIF``, ``AVIF``) the detector applies to, i.e.
+        those its null model was checked on; empty for all. On any other
+        format the core does not call it and records it ``skipped`` with the
+        reason.
     """
 
     name: str
@@ -75,6 +81,7 @@ class DetectorSpec:
     references: tuple[str, ...] = ()
     default_params: Mapping[str, Any] = field(default_factory=dict)
     uses: tuple[str, ...] = ()
+    formats: tuple[str, ...] = ()
 
 
 @dataclass
@@ -243,11 +250,30 @@ class ExifSummary:
 
 
 @dataclass
+class ContainedImage:
+    """An image in the evidence container besides the one analysed.
+
+    ``kind`` names what the container says it is (``frame``, ``page``, ``MPO
+    large thumbnail``, ``HEIF thumbnail``, ``HEIF depth image`` …);
+    ``index`` is its position in the container (frames and pages) or among
+    the primary image's auxiliary images.
+    """
+
+    index: int
+    kind: str
+    width: int | None = None
+    height: int | None = None
+
+
+@dataclass
 class EvidenceInfo:
     """Identity and properties of the evidence file, taken before any analysis.
 
     ``width`` and ``height`` are those of the stored pixel grid; ``orientation``
-    is reported, never applied.
+    is reported, never applied. In a container with several images the
+    primary one is analysed and the others are listed in ``other_images``;
+    ``decoder_note`` says what the decoder did that the stored bytes do not
+    (e.g. a HEIF rotation property that libheif always applies).
     """
 
     path: str
@@ -266,6 +292,8 @@ class EvidenceInfo:
     quantization_tables: dict[str, list[int]]
     exif: ExifSummary
     extra_metadata: dict[str, Any] = field(default_factory=dict)
+    other_images: list[ContainedImage] = field(default_factory=list)
+    decoder_note: str | None = None
 
 
 @dataclass
@@ -315,6 +343,7 @@ class Findings:
         exif["gps"] = GpsPosition(**exif["gps"]) if exif.get("gps") else None
         exif["raw"] = [RawTag(**t) for t in exif.get("raw", [])]
         ev["exif"] = ExifSummary(**exif)
+        ev["other_images"] = [ContainedImage(**c) for c in ev.get("other_images", [])]
         verdict = dict(data["verdict"])
         verdict["label"] = VerdictLabel(verdict["label"])
         verdict["contributions"] = [

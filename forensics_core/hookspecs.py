@@ -43,7 +43,10 @@ def forensics_register_detectors() -> Sequence[DetectorSpec]:
     Return a list of :class:`forensics_core.DetectorSpec`: for each, a unique
     ``name`` (lower case, digits and underscores), the implementation's
     ``version``, a one-sentence ``description``, the ``references`` it follows
-    and its ``default_params``. Detector names must be unique across all
+    and its ``default_params``; optionally the other detectors it ``uses``
+    and the evidence ``formats`` it applies to (those its null model was
+    checked on; the core records ``skipped`` with the reason on any other,
+    without calling the plugin). Detector names must be unique across all
     installed plugins; a clash is reported as a load error of the later plugin.
     """
 
@@ -58,7 +61,9 @@ def forensics_analyze(
     registered ``detector``. ``evidence`` gives the stored pixel grid
     (``evidence.pixels``, read-only; ``evidence.luma`` as float in [0, 1]),
     the original bytes (``evidence.data``) and the recorded properties and
-    EXIF (``evidence.info``). ``params`` holds the detector's default
+    EXIF (``evidence.info``). To decode the bytes again (a JPEG's own Y
+    channel), use ``evidence.open_image()`` or decode inside
+    ``with evidence.decoding():`` so the user's pixel limit applies. ``params`` holds the detector's default
     parameters merged with the user's overrides. ``prior`` maps the names in
     the spec's ``uses`` to their findings in this run, for those that ran
     (declare the argument only if you need it; it is empty otherwise).

@@ -69,6 +69,10 @@ SPEC = DetectorSpec(
     description="Finds regions whose demosaicing (colour filter array) phase disagrees with the rest of the photo.",
     references=REFERENCES,
     default_params=DEFAULT_PARAMS,
+    # HEVC, AV1 and VP8 subsample chroma and filter across their blocks in
+    # ways the null model (checked on camera JPEGs and lossless files) does
+    # not describe.
+    formats=("JPEG", "MPO", "PNG", "TIFF"),
 )
 
 

@@ -30,9 +30,10 @@ much of the frame.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from functools import partial
 from typing import Any
 
@@ -81,6 +82,10 @@ SPEC = DetectorSpec(
                 "is shifted or missing.",
     references=REFERENCES,
     default_params=DEFAULT_PARAMS,
+    # Lossy WebP (VP8), HEIF (HEVC) and AVIF (AV1) code in blocks of their own
+    # (4x4 to 64x64) and filter across them; ZERO's null was checked on JPEG
+    # and lossless files only.
+    formats=("JPEG", "MPO", "PNG", "TIFF"),
 )
 
 # The example luminance table of the JPEG standard (ITU-T T.81, Annex K.1),
@@ -177,11 +182,11 @@ def _region_record(i: int, stage: str, region: Region, tiles: np.ndarray, cell: 
     }
 
 
-def _recompressed(y: np.ndarray, quality: int) -> np.ndarray:
+def _recompressed(y: np.ndarray, quality: int, decoding: Callable) -> np.ndarray:
     """The luminance compressed as a greyscale JPEG at ``quality`` and decoded, in memory."""
     buf = io.BytesIO()
     Image.fromarray(np.clip(y, 0, 255).astype(np.uint8)).save(buf, format="JPEG", quality=quality)
-    with Image.open(buf) as img:
+    with decoding(), Image.open(buf) as img:
         return np.asarray(img, dtype=np.float32)
 
 
@@ -291,7 +296,8 @@ def _summary(details: dict[str, Any]) -> str:
             f"is.{crop}")
 
 
-def analyse_luminance(lum: Luminance, params: Mapping[str, Any]) -> DetectorResult:
+def analyse_luminance(lum: Luminance, params: Mapping[str, Any],
+                      decoding: Callable = contextlib.nullcontext) -> DetectorResult:
     """Run the detector on a prepared luminance.
 
     Parameters
@@ -300,6 +306,10 @@ def analyse_luminance(lum: Luminance, params: Mapping[str, Any]) -> DetectorResu
         From :func:`.luminance.luminance`.
     params : mapping
         :data:`DEFAULT_PARAMS` with the user's overrides.
+    decoding : callable
+        Context manager under which Pillow decodes images made from the
+        luminance (:meth:`forensics_core.Evidence.decoding`: the evidence's
+        pixel limit, not Pillow's default).
 
     Returns
     -------
@@ -384,7 +394,7 @@ def analyse_luminance(lum: Luminance, params: Mapping[str, Any]) -> DetectorResu
         elif not lum.jpeg:
             # ZERO's own test; a JPEG file's every pixel went through its compression on the grid (0, 0).
             details["missing_tested"] = True
-            again = _votes_of(_recompressed(lum.y, int(params["recompress_quality"])))
+            again = _votes_of(_recompressed(lum.y, int(params["recompress_quality"]), decoding))
             again[votes == main] = -1
             labels_q, regions_q = find_regions(again, np.arange(64) == grid_code(0, 0), log_nt)
             found += [("missing", r, partial(_region_tiles, labels_q, r, cell)) for r in regions_q]
@@ -409,6 +419,6 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
     t = time.perf_counter()
     lum = luminance(evidence)
     elapsed = time.perf_counter() - t
-    result = analyse_luminance(lum, params)
+    result = analyse_luminance(lum, params, evidence.decoding)
     result.details["elapsed_s"] = {"luminance": round(elapsed, 4), **result.details.get("elapsed_s", {})}
     return result

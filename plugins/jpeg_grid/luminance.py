@@ -67,10 +67,10 @@ class Luminance:
     clipped: np.ndarray | None = None
 
 
-def _decoded_y(data: bytes) -> tuple[np.ndarray, str] | None:
+def _decoded_y(evidence: Evidence) -> tuple[np.ndarray, str] | None:
     """The decoder's own Y (or grey) channel of a JPEG, or None when it cannot give one."""
     try:
-        with Image.open(io.BytesIO(data), formats=("JPEG",)) as img:
+        with evidence.decoding(), Image.open(io.BytesIO(evidence.data), formats=("JPEG",)) as img:
             if img.mode == "L":
                 img.load()
                 return np.asarray(img, dtype=np.float32), "jpeg_grey"
@@ -121,7 +121,7 @@ def luminance(evidence: Evidence) -> Luminance:
     if evidence.info.format in JPEG_FORMATS and raw is not None and len(raw) == 64:
         table = np.asarray(raw, dtype=np.float64).reshape(8, 8)
     if evidence.info.format in JPEG_FORMATS:
-        decoded = _decoded_y(evidence.data)
+        decoded = _decoded_y(evidence)
         if decoded is not None and decoded[0].shape == evidence.pixels.shape[:2]:
             y, source = decoded
             note = ("the JPEG's luminance channel exactly as decoded (no colour conversion)"
