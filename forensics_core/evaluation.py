@@ -70,7 +70,8 @@ def evaluate(findings: Sequence[DetectorFinding], verdict: Verdict, info: Eviden
     if calibration is None:
         return
     p_values = {f.name: (finding_p(f) if f.status is Status.OK else None) for f in findings}
-    llrs = calibration.detector_llrs(p_values)
+    scores = {f.name: (f.score if f.status is Status.OK else None) for f in findings}
+    llrs = calibration.detector_llrs(p_values, scores)
     for f in findings:
         f.log10_lr = None if llrs[f.name] is None else round(llrs[f.name], 4)
     fused = calibration.fused(llrs)

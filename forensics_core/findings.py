@@ -73,6 +73,11 @@ class DetectorSpec:
         those its null model was checked on; empty for all. On any other
         format the core does not call it and records it ``skipped`` with the
         reason.
+    calibrated_on : str
+        What a likelihood-ratio calibrator reads from the detector's findings:
+        ``"p_value"`` (its p-value, or ``min(1, nfa)``; the default) or
+        ``"score"``, for a detector that states no test but a measured
+        statistic (such a detector is advisory to the p-value triage rules).
     """
 
     name: str
@@ -82,6 +87,7 @@ class DetectorSpec:
     default_params: Mapping[str, Any] = field(default_factory=dict)
     uses: tuple[str, ...] = ()
     formats: tuple[str, ...] = ()
+    calibrated_on: str = "p_value"
 
 
 @dataclass

@@ -43,10 +43,12 @@ def forensics_register_detectors() -> Sequence[DetectorSpec]:
     Return a list of :class:`forensics_core.DetectorSpec`: for each, a unique
     ``name`` (lower case, digits and underscores), the implementation's
     ``version``, a one-sentence ``description``, the ``references`` it follows
-    and its ``default_params``; optionally the other detectors it ``uses``
-    and the evidence ``formats`` it applies to (those its null model was
+    and its ``default_params``; optionally the other detectors it ``uses``,
+    the evidence ``formats`` it applies to (those its null model was
     checked on; the core records ``skipped`` with the reason on any other,
-    without calling the plugin). Detector names must be unique across all
+    without calling the plugin) and ``calibrated_on="score"`` for a detector
+    that states no test but a measured statistic, whose likelihood ratio is
+    then calibrated on its ``score``. Detector names must be unique across all
     installed plugins; a clash is reported as a load error of the later plugin.
     """
 

@@ -20,18 +20,19 @@ console = Console(stderr=True, highlight=False)
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="Calibration file to write (JSON), e.g. forensics_core/calibration/real.json.")
 @click.option("--detectors", help="Comma-separated detector names (default: every detector in the records).")
-def calibrate_command(records, out_file, detectors):
+@click.pass_context
+def calibrate_command(ctx, records, out_file, detectors):
     """Fit each detector's LR calibrator and their fusion on validation RECORDS (validation.json of `validate`).
 
     Prints, per detector and fused, the photos used under each proposition,
     the ELUB bounds and the cross-validated Cllr and Cllr_min (folds grouped
     by scene). Needs NFI's lir (pip install lir).
     """
-    from .fit import calibrate
+    from .fit import calibrate, score_features
 
     names = [d.strip() for d in detectors.split(",") if d.strip()] if detectors else None
     try:
-        result = calibrate(records, names)
+        result = calibrate(records, names, score_features(ctx.find_root().command.host))
     except CalibrationError as exc:
         click.echo(f"forensics: {exc}", err=True)
         sys.exit(2)
@@ -50,4 +51,6 @@ def calibrate_command(records, out_file, detectors):
         table.add_row("fused", "", "", f"{f.intercept:+.3f}; {weights}", f"{f.lower:+.2f} .. {f.upper:+.2f}",
                       f"{f.cllr:.3f}", f"{f.cllr_min:.3f}")
     Console(highlight=False, width=160).print(table)
-    console.print(f"x = -log10 p (capped); calibration file: {out_file}")
+    scored = sorted(c.detector for c in result.calibrators.values() if c.feature == "score")
+    console.print(f"x = -log10 p (capped){'; x = score for ' + ', '.join(scored) if scored else ''}; "
+                  f"calibration file: {out_file}")

@@ -1,12 +1,14 @@
 """Fitting calibrators on validation records, with NFI's ``lir``, and measuring them by grouped cross-validation.
 
 Each validation record (``forensics validate``) lists, per photo, its
-ground truth and every detector's status and p-value; that is all a
+ground truth and every detector's status, p-value and score; that is all a
 calibrator needs, so calibrating never re-analyses a photo.
 
 * Per detector: lir's logistic calibrator (``LogitCalibrator``: logistic
   regression with balanced classes, whose log-odds is the log LR) on
-  ``x = -log10 p`` of the photos where the detector ran; ELUB bounds from
+  ``x = -log10 p`` of the photos where the detector ran, or on its score
+  for a detector whose spec says it is calibrated on its score
+  (``DetectorSpec.calibrated_on``); ELUB bounds from
   ``lir.algorithms.bayeserror.elub`` on its log10 LRs.
 * Fusion: logistic regression (balanced) on the detectors' bounded log10
   LRs, a declining detector entering as 0 (LR 1); ELUB bounds again.
@@ -30,8 +32,8 @@ from __future__ import annotations
 import json
 import math
 import re
-from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from importlib.metadata import version
 from pathlib import Path
 from typing import Any
@@ -39,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
-from .model import Calibrator, CalibrationError, CalibrationSet, Fusion, feature
+from .model import Calibrator, CalibrationError, CalibrationSet, Fusion
 
 FOLDS = 5
 _LN10 = math.log(10.0)
@@ -47,7 +49,7 @@ _LN10 = math.log(10.0)
 
 @dataclass(frozen=True)
 class Case:
-    """One calibration photo: its scene group, ground truth and each detector's p-value (None: declined)."""
+    """One calibration photo: its scene group, ground truth and each detector's p-value and score (None: declined)."""
 
     name: str
     scene: str
@@ -56,6 +58,11 @@ class Case:
     set: str = ""
     format: str | None = None
     megapixels: float | None = None
+    scores: dict[str, float | None] = field(default_factory=dict)
+
+    def llr(self, calibrator: Calibrator) -> float:
+        """The calibrator's log10 LR for this photo's finding of its detector."""
+        return calibrator.log10_lr(self.p_values.get(calibrator.detector), self.scores.get(calibrator.detector))
 
 
 def scene(name: str, conditions: dict[str, Any]) -> str:
@@ -86,9 +93,11 @@ def cases_from_rows(rows: Sequence[dict[str, Any]]) -> list[Case]:
         if c.get("error"):
             continue
         p = {name: (d["p_value"] if d["status"] == "ok" else None) for name, d in c["detectors"].items()}
+        score = {name: (d.get("score") if d["status"] == "ok" else None) for name, d in c["detectors"].items()}
         conditions = c.get("conditions", {})
         cases.append(Case(name=c["name"], scene=scene(c["name"], conditions), hp=bool(c["spliced"]), p_values=p,
-                          set=str(conditions.get("set", "")), format=c.get("format"), megapixels=c.get("megapixels")))
+                          set=str(conditions.get("set", "")), format=c.get("format"), megapixels=c.get("megapixels"),
+                          scores=score))
     return cases
 
 
@@ -133,24 +142,31 @@ def _elub(llrs: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     return float(min(lower, 0.0)), float(max(upper, 0.0))
 
 
-def fit_detector(name: str, cases: Sequence[Case]) -> Calibrator:
-    """A detector's calibrator from the cases where it ran; declines counted, not fitted."""
-    ran = [c for c in cases if c.p_values.get(name) is not None]
-    x = np.array([feature(c.p_values[name]) for c in ran], dtype=float)
-    y = np.array([int(c.hp) for c in ran])
+def fit_detector(name: str, cases: Sequence[Case], kind: str = "p") -> Calibrator:
+    """A detector's calibrator from the cases where it ran; declines counted, not fitted.
+
+    ``kind`` is the calibrator's feature: ``"p"`` (``-log10 p``) or
+    ``"score"`` (:class:`.model.Calibrator`).
+    """
+    probe = Calibrator(detector=name, intercept=0.0, slope=0.0, lower=0.0, upper=0.0, n_hp=0, n_hd=0, feature=kind)
+    values = [(probe.x(c.p_values.get(name), c.scores.get(name)), c) for c in cases if name in c.p_values]
+    ran = [(v, c) for v, c in values if v is not None]
+    x = np.array([v for v, _ in ran], dtype=float)
+    y = np.array([int(c.hp) for _, c in ran])
     intercept, slope = _logit_line(x, y)
     lower, upper = _elub(intercept + slope * x, y) if ran else (0.0, 0.0)
-    declined = [c for c in cases if name in c.p_values and c.p_values[name] is None]
+    declined = [c for v, c in values if v is None]
     return Calibrator(detector=name, intercept=intercept, slope=slope, lower=lower, upper=upper,
                       n_hp=int(y.sum()), n_hd=int(len(y) - y.sum()),
-                      n_declined_hp=sum(c.hp for c in declined), n_declined_hd=sum(not c.hp for c in declined))
+                      n_declined_hp=sum(c.hp for c in declined), n_declined_hd=sum(not c.hp for c in declined),
+                      feature=kind)
 
 
 def fit_fusion(detectors: Sequence[str], calibrators: dict[str, Calibrator], cases: Sequence[Case]) -> Fusion:
     """Logistic-regression fusion of the calibrated detectors' log10 LRs."""
     from sklearn.linear_model import LogisticRegression
 
-    X = np.array([[calibrators[d].log10_lr(c.p_values.get(d)) for d in detectors] for c in cases])
+    X = np.array([[c.llr(calibrators[d]) for d in detectors] for c in cases])
     y = np.array([int(c.hp) for c in cases])
     if len(set(y.tolist())) < 2:
         return Fusion(intercept=0.0, weights={d: 0.0 for d in detectors}, lower=0.0, upper=0.0)
@@ -162,13 +178,23 @@ def fit_fusion(detectors: Sequence[str], calibrators: dict[str, Calibrator], cas
     return Fusion(intercept=intercept, weights=weights, lower=lower, upper=upper)
 
 
-def _fit_all(detectors: Sequence[str], cases: Sequence[Case]) -> tuple[dict[str, Calibrator], Fusion]:
-    calibrators = {d: fit_detector(d, cases) for d in detectors}
+def _fit_all(detectors: Sequence[str], cases: Sequence[Case],
+             features: Mapping[str, str] | None) -> tuple[dict[str, Calibrator], Fusion]:
+    calibrators = {d: fit_detector(d, cases, (features or {}).get(d, "p")) for d in detectors}
     return calibrators, fit_fusion(detectors, calibrators, cases)
 
 
-def cross_validated(detectors: Sequence[str], cases: Sequence[Case]) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    """Per detector and fused, each case's log10 LR from calibrators fitted without its scene."""
+def score_features(host: Any) -> dict[str, str]:
+    """``{detector: "score"}`` for the host's detectors whose spec says they are calibrated on their score."""
+    return {name: "score" for name, d in host.detectors.items() if d.spec.calibrated_on == "score"}
+
+
+def cross_validated(detectors: Sequence[str], cases: Sequence[Case],
+                    features: Mapping[str, str] | None = None) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Per detector and fused, each case's log10 LR from calibrators fitted without its scene.
+
+    ``features`` maps a detector to its calibrator's feature (default ``"p"``).
+    """
     from sklearn.model_selection import GroupKFold
 
     groups = np.array([c.scene for c in cases])
@@ -176,9 +202,9 @@ def cross_validated(detectors: Sequence[str], cases: Sequence[Case]) -> tuple[di
     per = {d: np.zeros(len(cases)) for d in detectors}
     fused = np.zeros(len(cases))
     for train, test in GroupKFold(n_splits=folds).split(np.zeros(len(cases)), groups=groups):
-        calibrators, fusion = _fit_all(detectors, [cases[i] for i in train])
+        calibrators, fusion = _fit_all(detectors, [cases[i] for i in train], features)
         for i in test:
-            llrs = {d: calibrators[d].log10_lr(cases[i].p_values.get(d)) for d in detectors}
+            llrs = {d: cases[i].llr(calibrators[d]) for d in detectors}
             for d in detectors:
                 per[d][i] = llrs[d]
             fused[i] = fusion.log10_lr(llrs)
@@ -192,7 +218,8 @@ def costs(llrs: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     return float(metrics.cllr(data)), float(metrics.cllr_min(data))
 
 
-def calibrate(paths: Sequence[Path], detectors: Sequence[str] | None = None) -> CalibrationSet:
+def calibrate(paths: Sequence[Path], detectors: Sequence[str] | None = None,
+              features: Mapping[str, str] | None = None) -> CalibrationSet:
     """Calibrators, fusion and their cross-validated Cllr from validation records.
 
     Parameters
@@ -201,6 +228,9 @@ def calibrate(paths: Sequence[Path], detectors: Sequence[str] | None = None) -> 
         ``validation.json`` records.
     detectors : sequence of str, optional
         Detectors to calibrate (default: every detector the records hold).
+    features : mapping of str to str, optional
+        ``"score"`` for detectors calibrated on their score
+        (:func:`score_features`); the others on ``-log10 p``.
 
     Returns
     -------
@@ -216,8 +246,8 @@ def calibrate(paths: Sequence[Path], detectors: Sequence[str] | None = None) -> 
     y = np.array([int(c.hp) for c in cases])
     if len(set(y.tolist())) < 2:
         raise CalibrationError("the validation records need photos under both propositions")
-    calibrators, fusion = _fit_all(names, cases)
-    per, fused = cross_validated(names, cases)
+    calibrators, fusion = _fit_all(names, cases, features)
+    per, fused = cross_validated(names, cases, features)
     scored = {d: replace(calibrators[d], **dict(zip(("cllr", "cllr_min"), costs(per[d], y)))) for d in names}
     fusion = replace(fusion, **dict(zip(("cllr", "cllr_min"), costs(fused, y))))
 
@@ -244,13 +274,15 @@ def _costs_entry(llrs: np.ndarray, y: np.ndarray) -> dict[str, Any]:
             "cllr_cal": round(cllr - cllr_min, 4)}
 
 
-def performance(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
+def performance(rows: Sequence[dict[str, Any]], features: Mapping[str, str] | None = None) -> dict[str, Any]:
     """Cross-validated LR performance of a validation run, per detector and fused, overall and per set.
 
     Parameters
     ----------
     rows : sequence of dict
         The record's per-photo rows.
+    features : mapping of str to str, optional
+        As for :func:`calibrate`.
 
     Returns
     -------
@@ -273,7 +305,7 @@ def performance(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
     except CalibrationError as exc:
         return {"method": method, "note": str(exc)}
     names = sorted({d for c in cases for d in c.p_values})
-    per, fused = cross_validated(names, cases)
+    per, fused = cross_validated(names, cases, features)
     series = {**per, "verdict": fused}
     sets = np.array([c.set for c in cases])
     out: dict[str, Any] = {"method": method, "all": {n: _costs_entry(v, y) for n, v in series.items()},

@@ -13,8 +13,11 @@ The propositions (issue 13; ENFSI Guideline for Evaluative Reporting, 2015):
 A detector's LR is ``10 ** (a + b x)`` with ``x = -log10 p`` (its p-value,
 or ``min(1, NFA)``, capped at :data:`FEATURE_CAP`), clipped to the ELUB
 bounds of its calibration data (Vergeer et al. 2016): no LR claims more than
-the validation data can support. A detector that declines (status other than
-``ok``, or no p-value) gives LR = 1. The fused LR is a logistic-regression
+the validation data can support. A detector that states no test but a
+measured ``score`` (e.g. copy_move's fine-grain identity) is calibrated on
+that score instead (``x = score``; the calibrator's ``feature`` says which).
+A detector that declines (status other than ``ok``, or no value of its
+feature) gives LR = 1. The fused LR is a logistic-regression
 fusion of the detectors' log10 LRs, ``c + sum(w_d llr_d)``, clipped to its
 own ELUB bounds; it learns how far the detectors repeat one another instead
 of assuming they are independent.
@@ -85,6 +88,9 @@ class Calibrator:
         Cross-validated (grouped by scene) cost of the log-LRs over all
         calibration photos, declines included as LR 1, and its minimum after
         an ideal monotone recalibration.
+    feature : str
+        ``"p"``: ``x = -log10 p`` (:func:`feature`); ``"score"``: ``x`` is the
+        finding's score, for detectors that state no p-value.
     """
 
     detector: str
@@ -98,10 +104,17 @@ class Calibrator:
     n_declined_hd: int = 0
     cllr: float | None = None
     cllr_min: float | None = None
+    feature: str = "p"
 
-    def log10_lr(self, p: float | None) -> float:
-        """log10 LR for a p-value (None: the detector declined, LR 1)."""
-        x = feature(p)
+    def x(self, p: float | None, score: float | None = None) -> float | None:
+        """The calibrator's input from a finding's p-value and score; None when it has none."""
+        if self.feature == "score":
+            return None if score is None or not math.isfinite(score) else float(score)
+        return feature(p)
+
+    def log10_lr(self, p: float | None, score: float | None = None) -> float:
+        """log10 LR for a finding's p-value and score (no value of the feature: the detector declined, LR 1)."""
+        x = self.x(p, score)
         if x is None:
             return 0.0
         return _clip(self.intercept + self.slope * x, self.lower, self.upper)
@@ -157,13 +170,16 @@ class CalibrationSet:
     format: str = FORMAT
     propositions: dict[str, str] = field(default_factory=lambda: {"hp": HP, "hd": HD})
 
-    def detector_llrs(self, p_values: Mapping[str, float | None]) -> dict[str, float | None]:
+    def detector_llrs(self, p_values: Mapping[str, float | None],
+                      scores: Mapping[str, float | None] | None = None) -> dict[str, float | None]:
         """log10 LR per detector: ``p_values`` maps a detector that ran to its p-value (None when it declined).
 
-        Detectors without a calibrator get None: their output is shown
-        uncalibrated and stays out of the fused LR.
+        ``scores`` maps it to its score, for calibrators on scores. Detectors
+        without a calibrator get None: their output is shown uncalibrated and
+        stays out of the fused LR.
         """
-        return {name: (self.calibrators[name].log10_lr(p) if name in self.calibrators else None)
+        scores = scores or {}
+        return {name: (self.calibrators[name].log10_lr(p, scores.get(name)) if name in self.calibrators else None)
                 for name, p in p_values.items()}
 
     def fused(self, llrs: Mapping[str, float | None]) -> float | None:

@@ -8,7 +8,7 @@ the report's "Known error rates" section reads such a record.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
@@ -22,7 +22,7 @@ from ..synthetic import SyntheticCase
 from .cases import Case, Suite, SuiteError, content_hash, folder_suite, read_suite, write_synthetic
 from .dependence import authentic_dependence
 from .null_check import null_checks
-from ..calibration.fit import performance
+from ..calibration.fit import performance, score_features
 from .record import FORMAT, Dataset, ValidationRecord, case_rows, compute_methods, read_record, shipped_record
 from .runner import CaseResult, default_workers, run_cases
 
@@ -101,7 +101,7 @@ def validate(
         cases=rows,
         null_checks=null_checks(rows, fusion),
         dependence=authentic_dependence(rows),
-        likelihood_ratios=performance(rows),
+        likelihood_ratios=performance(rows, score_features(host)),
     )
     write_atomic(out / RECORD_NAME, record.to_json().encode("utf-8"))
     from .page import write_page  # matplotlib: loaded only when a page is made

@@ -196,3 +196,34 @@ def test_relevance_says_whether_the_photo_lies_within_the_calibration_data(photo
     outside = relevance(formats=["PNG"], megapixels=[mp * 2, mp * 4])
     assert "outside them" in outside and "format (JPEG)" in outside and "size" in outside
     assert "not recorded" in relevance()
+
+
+def test_a_detector_that_states_no_p_value_is_calibrated_on_its_score(tmp_path):
+    """A measured statistic without a test (copy_move's fine-grain identity) gets an LR from its score."""
+    path = _record(tmp_path)
+    record = json.loads(path.read_text())
+    rng = np.random.default_rng(3)
+    for case in record["cases"]:
+        score = float(rng.uniform(0.4, 0.9)) if case["spliced"] else float(rng.uniform(0.0, 0.3))
+        case["detectors"]["measured"] = {"status": "ok", "p_value": None, "score": score}
+    case = record["cases"][0]
+    case["detectors"]["measured"] = {"status": "inconclusive", "p_value": None, "score": None}
+    path.write_text(json.dumps(record))
+    assert calibrate([path]).calibrators["measured"].n_declined_hd == 20  # on p-values it never ran
+    cs = calibrate([path], features={"measured": "score"})
+    measured = cs.calibrators["measured"]
+    assert measured.feature == "score" and cs.calibrators["strong"].feature == "p"
+    assert measured.slope > 0 and measured.cllr < cs.calibrators["noise"].cllr and measured.cllr_min < 0.1
+    assert measured.n_declined_hd == 1
+    assert measured.log10_lr(None, None) == 0.0
+    assert measured.log10_lr(None, 0.9) > 0.0 > measured.log10_lr(None, 0.05)
+    llrs = cs.detector_llrs({"measured": None, "strong": 1e-6}, {"measured": 0.8})
+    assert llrs["measured"] == pytest.approx(measured.log10_lr(None, 0.8))
+    reloaded = load_json(cs.to_json(), tmp_path)
+    assert reloaded.calibrators["measured"].feature == "score"
+
+
+def load_json(text, tmp_path):
+    path = tmp_path / "cal.json"
+    path.write_text(text)
+    return load(path)

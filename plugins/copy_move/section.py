@@ -1,0 +1,37 @@
+"""The copy_move section of the evidence report."""
+
+from __future__ import annotations
+
+from importlib.resources import files
+
+from forensics_core import DetectorFinding, Evidence
+from forensics_core.report import Figure, ReportSection
+
+from .detector import REFERENCES
+from .figures import overlay_png
+
+
+def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSection:
+    """The section for one copy_move finding: the overlay, the candidate copies, the method and its limits."""
+    d = finding.details
+    rows = [{
+        "id": h["id"], "inliers": h["n_inliers"], "scale": f"{h['scale']:.3f}",
+        "rotation": f"{h['rotation_deg']:.1f}°", "shift": "{:.0f}, {:.0f}".format(*h["translation_px"]),
+        "identity": "–" if h["identity"] is None else f"{h['identity']:.2f}", "windows": h["n_windows"],
+        "identical": len(h["identical_windows_px"]), "best": h["id"] == d.get("best"),
+    } for h in d.get("hypotheses", [])]
+    figures = {}
+    if d.get("best") is not None:
+        figures["overlay"] = Figure(
+            overlay_png(evidence.luma, d), "image/png",
+            "The best candidate copy: matched keypoints joined by yellow lines; red, windows of one region whose "
+            "fine grain correlates with the other's at r ≥ "
+            f"{finding.parameters.get('identical_window_r', 0.5)}; blue, where they come from under the transform. "
+            "Which of the two is the copy cannot be told from the match alone.")
+    context = {
+        "n_keypoints": d.get("n_keypoints"), "n_matches": d.get("n_matches"),
+        "work_scale": d.get("work_scale"), "rows": rows, "params": finding.parameters,
+        "log10_lr": finding.log10_lr, "references": list(REFERENCES), "opencv": d.get("opencv"),
+    }
+    template = files(__package__).joinpath("templates/section.html.j2").read_text(encoding="utf-8")
+    return ReportSection(title="Copy-move (cloned regions)", template=template, context=context, figures=figures)
