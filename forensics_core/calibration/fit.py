@@ -265,6 +265,26 @@ def calibrate(paths: Sequence[Path], detectors: Sequence[str] | None = None,
     return CalibrationSet(data=data, tool=tool, calibrators=scored, fusion=fusion)
 
 
+def supports_hp(rows: Sequence[dict[str, Any]], features: Mapping[str, str]) -> dict[str, dict[str, bool]]:
+    """For detectors calibrated on their score: per photo name, whether its cross-validated LR exceeds 1.
+
+    The operating point of a detector that states no test (it decides
+    nothing itself): "the calibrated finding supports Hp". Empty when lir is
+    absent or the rows hold one proposition only.
+    """
+    names = sorted(d for d, kind in features.items() if kind == "score")
+    cases = cases_from_rows(rows)
+    if not names or len({c.hp for c in cases}) < 2:
+        return {}
+    try:
+        _lir()
+    except CalibrationError:
+        return {}
+    present = [d for d in names if any(d in c.p_values for c in cases)]
+    per, _ = cross_validated(sorted({d for c in cases for d in c.p_values}), cases, features)
+    return {d: {c.name: bool(per[d][i] > 0.0) for i, c in enumerate(cases)} for d in present}
+
+
 def _costs_entry(llrs: np.ndarray, y: np.ndarray) -> dict[str, Any]:
     n_hp, n_hd = int(y.sum()), int(len(y) - y.sum())
     if n_hp == 0 or n_hd == 0:

@@ -22,7 +22,7 @@ from ..synthetic import SyntheticCase
 from .cases import Case, Suite, SuiteError, content_hash, folder_suite, read_suite, write_synthetic
 from .dependence import authentic_dependence
 from .null_check import null_checks
-from ..calibration.fit import performance, score_features
+from ..calibration.fit import performance, score_features, supports_hp
 from .record import FORMAT, Dataset, ValidationRecord, case_rows, compute_methods, read_record, shipped_record
 from .runner import CaseResult, default_workers, run_cases
 
@@ -83,6 +83,7 @@ def validate(
     results = run_cases(suite.cases, host, options, out / "findings", workers, on_done)
     versions = {n: d.spec.version for n, d in host.detectors.items()}
     rows = case_rows(results)
+    features = score_features(host)
     fusion = {"policy": options.fusion, "alpha": ALPHA}
     record = ValidationRecord(
         format=FORMAT,
@@ -96,12 +97,12 @@ def validate(
         ),
         fusion=fusion,
         detector_params=params,
-        methods=compute_methods(results, versions, ALPHA),
+        methods=compute_methods(results, versions, ALPHA, supports_hp(rows, features)),
         elapsed_s=round(time.perf_counter() - started, 1),
         cases=rows,
         null_checks=null_checks(rows, fusion),
         dependence=authentic_dependence(rows),
-        likelihood_ratios=performance(rows, score_features(host)),
+        likelihood_ratios=performance(rows, features),
     )
     write_atomic(out / RECORD_NAME, record.to_json().encode("utf-8"))
     from .page import write_page  # matplotlib: loaded only when a page is made

@@ -272,26 +272,37 @@ def _by_condition(rows: Sequence[_Row]) -> list[ConditionMetrics]:
 
 
 def compute_methods(
-    results: Sequence[CaseResult], versions: Mapping[str, str], alpha: float
+    results: Sequence[CaseResult], versions: Mapping[str, str], alpha: float,
+    supports_hp: Mapping[str, Mapping[str, bool]] | None = None,
 ) -> list[MethodMetrics]:
     """Metrics of each detector and of the fused verdict over the photos that were taken in.
 
     A detector's own operating point is "p-value below ``alpha``" (its test at
-    the fusion level, before any correction) or, for one that states no
-    p-value, "score above 0"; the verdict's is "inconsistent".
+    the fusion level, before any correction); for one calibrated on its
+    score, "cross-validated LR above 1" where ``supports_hp`` gives it (photo
+    name -> bool, :func:`forensics_core.calibration.fit.supports_hp`); for
+    any other that states no p-value, "score above 0". The verdict's is
+    "inconsistent".
     """
     taken = [r for r in results if r.error is None]
     methods = []
     for name in sorted({n for r in taken for n in r.detectors}):
         with_p = any(r.detectors[name].p_value is not None for r in taken if name in r.detectors)
-        rule = f"p-value below {alpha:g}" if with_p else "score above 0"
+        by_lr = (supports_hp or {}).get(name) if not with_p else None
+        rule = (f"p-value below {alpha:g}" if with_p else
+                "calibrated LR above 1 (cross-validated by scene)" if by_lr is not None else "score above 0")
 
         def row(r: CaseResult) -> _Row:
             d = r.detectors.get(name)
             if d is None:
                 return _Row(r.spliced, r.conditions, 0.0, False, False, True)
             decided = d.status is Status.OK
-            flagged = decided and ((d.p_value is not None and d.p_value < alpha) if with_p else (d.score or 0.0) > 0.0)
+            if with_p:
+                flagged = decided and d.p_value is not None and d.p_value < alpha
+            elif by_lr is not None:
+                flagged = decided and by_lr.get(r.name, False)
+            else:
+                flagged = decided and (d.score or 0.0) > 0.0
             return _Row(r.spliced, r.conditions, suspicion(d.p_value if with_p else None, d.score, decided),
                         decided, flagged, d.status is Status.ERROR, d.mcc, d.iou)
 

@@ -124,8 +124,10 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     -------
     DetectorResult
         ``ok`` with ``score`` = the largest fine-grain identity over the
-        candidate copies (clipped to [0, 1]; 0 when none was found) and no
-        p-value; ``inconclusive`` with too few keypoints.
+        candidate copies (clipped to [0, 1]) and no p-value; ``ok`` with no
+        score when no candidate copy could be compared (the calibrated LR is
+        then 1: finding no clone says nothing about a splice or a removal,
+        which Hp covers as well); ``inconclusive`` with too few keypoints.
     """
     marks: dict[str, float] = {}
     t = time.perf_counter()
@@ -158,8 +160,8 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     summary = _summary(status, matches.n_keypoints, records, best, int(params["min_keypoints"]))
     if status is Status.INCONCLUSIVE:
         return DetectorResult(status, summary, details=details)
-    score = 0.0 if best is None else float(np.clip(best["identity"], 0.0, 1.0))
-    return DetectorResult(status, summary, score=round(score, 4), details=details)
+    score = None if best is None else round(float(np.clip(best["identity"], 0.0, 1.0)), 4)
+    return DetectorResult(status, summary, score=score, details=details)
 
 
 def regions_mask(details: Mapping[str, Any], shape: tuple[int, int]) -> np.ndarray:

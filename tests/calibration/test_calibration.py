@@ -227,3 +227,28 @@ def load_json(text, tmp_path):
     path = tmp_path / "cal.json"
     path.write_text(text)
     return load(path)
+
+
+def test_a_score_detector_is_judged_at_its_calibrated_lr_not_at_score_above_0():
+    from forensics_core import Status
+    from forensics_core.calibration.fit import supports_hp
+    from forensics_core.validation.record import compute_methods
+    from forensics_core.validation.runner import CaseResult, DetectorOutcome
+
+    rng = np.random.default_rng(4)
+    results = []
+    for i in range(60):
+        hp = i % 2 == 1
+        score = float(rng.uniform(0.5, 0.9) if hp else rng.uniform(0.0, 0.4))
+        results.append(CaseResult(f"photo{i}", hp, {"set": "made", "scene": f"s{i}"}, "0" * 64, None, None,
+                                  {"measured": DetectorOutcome(Status.OK, None, score, None, 0.0)}))
+    rows = [{"name": r.name, "spliced": r.spliced, "error": None, "conditions": r.conditions,
+             "detectors": {"measured": {"status": "ok", "p_value": None, "score": r.detectors["measured"].score}}}
+            for r in results]
+    flags = supports_hp(rows, {"measured": "score"})
+    (plain,) = [m for m in compute_methods(results, {"measured": "1"}, 0.01) if m.name == "measured"]
+    (by_lr,) = [m for m in compute_methods(results, {"measured": "1"}, 0.01, flags) if m.name == "measured"]
+    plain, by_lr = plain.operating_point, by_lr.operating_point
+    assert plain.rule == "score above 0" and by_lr.rule.startswith("calibrated LR above 1")
+    # Nearly every authentic photo has a score above 0; few have a calibrated LR above 1.
+    assert plain.fpr.k >= 28 and by_lr.fpr.k <= 3 and by_lr.tpr.k >= 27
