@@ -10,7 +10,7 @@ OUT    ?= out
 
 # WeasyPrint needs Pango (and HarfBuzz' subsetter, and a font); the tests use
 # poppler's pdfsig, pdftoppm, pdftotext, pdfinfo and pdfdetach, and openssl.
-SYSTEM_PACKAGES := libpango-1.0-0 libpangoft2-1.0-0 libharfbuzz-subset0 fonts-dejavu-core poppler-utils openssl
+SYSTEM_PACKAGES := libpango-1.0-0 libpangoft2-1.0-0 libharfbuzz-subset0 fonts-dejavu-core poppler-utils openssl libimage-exiftool-perl
 
 VALIDATION ?= out/validation
 REAL ?= ../shared/data/real
@@ -64,7 +64,7 @@ system-packages:
 	libs=$$( { ldconfig -p || /sbin/ldconfig -p; } 2>/dev/null ); \
 	echo "$$libs" | grep -q 'libpango-1.0.so.0' || missing="$$missing pango"; \
 	echo "$$libs" | grep -q 'libharfbuzz-subset.so.0' || missing="$$missing harfbuzz-subset"; \
-	for tool in pdfsig pdftoppm pdftotext pdfinfo pdfdetach openssl fc-list; do \
+	for tool in pdfsig pdftoppm pdftotext pdfinfo pdfdetach openssl fc-list exiftool; do \
 	  command -v $$tool >/dev/null || missing="$$missing $$tool"; done; \
 	if [ -n "$$missing" ]; then \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \

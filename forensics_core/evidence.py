@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import io
+import json
 import os
 import struct
 import threading
@@ -21,8 +22,10 @@ from pathlib import Path
 
 import numpy as np
 from PIL import ExifTags, Image, ImageFile, TiffImagePlugin, UnidentifiedImageError
+from PIL import __version__ as _PILLOW_VERSION
 
-from .findings import ContainedImage, EvidenceInfo, ExifSummary, GpsPosition, RawTag
+from . import exiftool
+from .findings import ContainedImage, EvidenceInfo, ExifSummary, GpsPosition, MetadataTag, RawTag
 
 try:
     import pillow_heif
@@ -141,10 +144,13 @@ def _hashes(data: bytes) -> tuple[str, str, str]:
 def _safe_text(value: object) -> str:
     """Render an EXIF value as printable text of bounded length.
 
-    Strings keep their characters except controls, which are escaped so a
-    terminal or a report shows them instead of acting on them; bytes that are
-    not printable ASCII are shown in hex. Markup in strings stays as text here:
-    escaping for HTML is the renderer's job.
+    Strings keep their characters except controls and format characters
+    (including the bidirectional overrides that make ``exe.jpg`` read as
+    ``gpj.exe``), which are escaped so a terminal or a report shows them
+    instead of acting on them; bytes that are not printable ASCII are shown in
+    hex. Pillow decodes EXIF text as Latin-1; text that is valid UTF-8 (what
+    phones and most programs write) is decoded as UTF-8 instead. Markup in
+    strings stays as text here: escaping for HTML is the renderer's job.
     """
     if isinstance(value, bytes):
         stripped = value.rstrip(b"\x00")
@@ -159,13 +165,38 @@ def _safe_text(value: object) -> str:
         text = "(" + ", ".join(_safe_text(v) for v in value) + ")"
     elif isinstance(value, TiffImagePlugin.IFDRational):
         text = "nan" if value.denominator == 0 else f"{float(value):g}"
+    elif isinstance(value, str):
+        text = _utf8(value)
+    elif isinstance(value, (list, dict)):
+        text = "; ".join(_safe_text(v) for v in value) if isinstance(value, list) else json.dumps(value, ensure_ascii=False)
     else:
         text = str(value)
     text = text.rstrip("\x00")
-    text = "".join(c if c.isprintable() else f"\\x{ord(c):02x}" for c in text)
+    text = "".join(c if c.isprintable() else (f"\\x{ord(c):02x}" if ord(c) < 0x100 else f"\\u{ord(c):04x}")
+                   for c in text)
     if len(text) > _RAW_VALUE_LIMIT:
         text = text[:_RAW_VALUE_LIMIT] + f"... ({len(text)} characters)"
     return text
+
+
+def _utf8(text: str) -> str:
+    """``text`` re-read as UTF-8 when it is UTF-8 bytes that were decoded as Latin-1, else unchanged."""
+    if text.isascii():
+        return text
+    try:
+        return text.encode("latin-1").decode("utf-8")
+    except (UnicodeEncodeError, UnicodeDecodeError):
+        return text
+
+
+def _metadata(data: bytes) -> tuple[list[MetadataTag], str]:
+    """ExifTool's tags of ``data``, and the sentence naming the reader (or why Pillow's EXIF is all there is)."""
+    found = exiftool.read(data)
+    if found.error is not None:
+        return [], (f"Pillow {_PILLOW_VERSION}, EXIF only (no MakerNotes, IPTC or ICC tags, little XMP): "
+                    f"{found.error}")
+    tags = [MetadataTag(t.group, t.name, _safe_text(t.value)) for t in found.tags]
+    return tags, f"ExifTool {found.version} ({' '.join(exiftool.ARGUMENTS)}), reading the hashed bytes"
 
 
 def _clean_str(value: object) -> str | None:
@@ -383,6 +414,7 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
         raise EvidenceError(f"corrupt or truncated image: {reason}") from None
 
     exif = _read_exif(img)
+    metadata, reader = _metadata(data)
     quant = getattr(img, "quantization", None) or {}
     info = EvidenceInfo(
         path=str(p.resolve()),
@@ -402,6 +434,8 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
         exif=exif,
         other_images=others,
         decoder_note=_decoder_note(img),
+        metadata=metadata,
+        metadata_reader=reader,
     )
     try:
         pixels = _pixel_array(img)

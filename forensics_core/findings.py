@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
-SCHEMA_VERSION = "1.3"
+SCHEMA_VERSION = "1.4"
 
 
 class Status(str, enum.Enum):
@@ -235,6 +235,16 @@ class RawTag:
 
 
 @dataclass
+class MetadataTag:
+    """One tag as ExifTool reads it: its family-1 group (``IFD0``, ``ExifIFD``, ``Canon``, ``XMP-xmpMM``,
+    ``IPTC``, ``ICC_Profile``, ``JUMBF``, ...), its name and its value rendered as safe text."""
+
+    group: str
+    name: str
+    value: str
+
+
+@dataclass
 class ExifSummary:
     """The EXIF fields examiners read first, plus every tag in ``raw``."""
 
@@ -280,6 +290,9 @@ class EvidenceInfo:
     primary one is analysed and the others are listed in ``other_images``;
     ``decoder_note`` says what the decoder did that the stored bytes do not
     (e.g. a HEIF rotation property that libheif always applies).
+    ``metadata`` holds every tag ExifTool read, by group, and
+    ``metadata_reader`` names the reader and its arguments, or says why
+    Pillow's EXIF reading (``exif.raw``) is all there is.
     """
 
     path: str
@@ -300,6 +313,8 @@ class EvidenceInfo:
     extra_metadata: dict[str, Any] = field(default_factory=dict)
     other_images: list[ContainedImage] = field(default_factory=list)
     decoder_note: str | None = None
+    metadata: list[MetadataTag] = field(default_factory=list)
+    metadata_reader: str | None = None
 
 
 @dataclass
@@ -350,6 +365,7 @@ class Findings:
         exif["raw"] = [RawTag(**t) for t in exif.get("raw", [])]
         ev["exif"] = ExifSummary(**exif)
         ev["other_images"] = [ContainedImage(**c) for c in ev.get("other_images", [])]
+        ev["metadata"] = [MetadataTag(**t) for t in ev.get("metadata", [])]
         verdict = dict(data["verdict"])
         verdict["label"] = VerdictLabel(verdict["label"])
         verdict["contributions"] = [

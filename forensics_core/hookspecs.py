@@ -105,7 +105,14 @@ def forensics_report_section(finding: DetectorFinding, evidence: Evidence) -> Re
 
 @hookspec
 def forensics_extract_metadata(evidence: Evidence) -> Mapping[str, Any] | None:
-    """Optionally read extra metadata from the evidence (e.g. XMP, maker notes).
+    """Optionally read extra metadata from the evidence.
+
+    The core already records every tag ExifTool reads (EXIF, MakerNotes, XMP,
+    IPTC, ICC, JUMBF) in ``evidence.info.metadata`` (a list of
+    :class:`forensics_core.MetadataTag`: ``group``, ``name``, ``value``) and
+    names the reader in ``evidence.info.metadata_reader``; read them there.
+    Implement this hook for what ExifTool does not read or does not group
+    the way your detector needs.
 
     Return a JSON-serialisable mapping; it is recorded in the findings under
     ``evidence.extra_metadata[<plugin name>]``. Do not re-open the file:

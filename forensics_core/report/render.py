@@ -351,11 +351,20 @@ def render_html(findings: Findings, evidence: Evidence, signature: SignatureInfo
         "command_line": command_line(findings),
         "signature": signature,
         "raw_tags": ev.exif.raw,
+        "metadata_groups": _metadata_groups(ev.metadata),
         "extra_metadata": ev.extra_metadata,
         "error_rates": _error_rates(findings, options),
     }
     html = _environment().get_template("report.html.j2").render(context)
     return RenderedReport(html=html, sections=built)
+
+
+def _metadata_groups(tags) -> list[tuple[str, list]]:
+    """ExifTool's tags by family-1 group, groups in the order ExifTool met them."""
+    groups: dict[str, list] = {}
+    for t in tags:
+        groups.setdefault(t.group, []).append(t)
+    return list(groups.items())
 
 
 def render_pdf(report: RenderedReport) -> bytes:

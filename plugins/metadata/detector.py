@@ -26,12 +26,13 @@ from forensics_core import DetectorFinding, DetectorResult, DetectorSpec, Eviden
 
 from . import lens_check
 from .checks import APPLICABLE, Check, datetimes, dimensions, dimensions_changed, exif_presence, software_tag
+from .exiftool_checks import document_ancestors, embedded_previews, makernote_serial, xmp_dates
 from .quantisation import quantisation_check
 from .thumbnail import ThumbnailThresholds, thumbnail_check
 from .xmp import xmp_agents
 
 NAME = "metadata"
-VERSION = "1.1.0"
+VERSION = "1.2.0"
 
 REFERENCES = (
     "CIPA DC-008-2019 / JEITA CP-3451E, Exchangeable image file format for digital still cameras: Exif Version 2.32, "
@@ -132,7 +133,9 @@ def analyse(evidence: Evidence, params: Mapping[str, Any], prior: Mapping[str, D
     marks: dict[str, float] = {}
     t = time.perf_counter()
     checks = [exif_presence(info), software_tag(info, xmp_agents(evidence.data)),
-              datetimes(info, float(params["datetime_tolerance_s"])), dimensions(info)]
+              datetimes(info, float(params["datetime_tolerance_s"])), dimensions(info),
+              xmp_dates(info, float(params["datetime_tolerance_s"])), document_ancestors(info), makernote_serial(info),
+              embedded_previews(info)]
     marks["tags"] = round(time.perf_counter() - t, 4)
 
     t = time.perf_counter()

@@ -44,7 +44,7 @@ def _camera_file(tmp_path, img=None, thumb_img=None, **overrides):
 
 def test_spec_and_hooks():
     assert plugin.forensics_register_detectors() == [SPEC]
-    assert SPEC.uses == ("lens_distortion",) and SPEC.version == "1.1.0"
+    assert SPEC.uses == ("lens_distortion",) and SPEC.version == "1.2.0"
     assert json.dumps(SPEC.default_params)
     assert any("CC BY-SA 3.0" in ref for ref in SPEC.references)
     assert plugin.forensics_analyze("lens_distortion", None, {}, {}) is None
