@@ -13,10 +13,9 @@ peak resident memory (``VmHWM``; ``baseline`` = interpreter and libraries).
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
-from harness import fresh_runs, parse_size, print_stages
+from harness import photo_benchmark
 
 OUT = Path(__file__).resolve().parent / "out"
 
@@ -55,17 +54,5 @@ def photo(size: tuple[int, int]) -> Path:
     return path
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--runs", type=int, default=5)
-    parser.add_argument("--size", default="4000x3000")
-    args = parser.parse_args()
-    size = parse_size(args.size)
-    target = photo(size)
-    runs = fresh_runs(_CHILD, target, args.runs)
-    print(f"copy_move on {target.name} ({size[0]}x{size[1]}), {args.runs} runs, score {runs[0]['score']}")
-    print_stages(runs)
-
-
 if __name__ == "__main__":
-    main()
+    photo_benchmark(__doc__, "copy_move", _CHILD, photo)

@@ -8,10 +8,12 @@ JSON object with ``stages`` (seconds by stage), ``peak_mb`` and
 
 from __future__ import annotations
 
+import argparse
 import json
 import statistics
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -48,3 +50,16 @@ def print_stages(runs: list[dict[str, Any]]) -> None:
     peaks = [r["peak_mb"] for r in runs]
     print(f"{'peak RSS MB':<22}{statistics.median(peaks):>10.0f}{min(peaks):>10.0f}{max(peaks):>10.0f}")
     print(f"{'baseline RSS MB':<22}{statistics.median(r['baseline_mb'] for r in runs):>10.0f}")
+
+
+def photo_benchmark(doc: str, name: str, child: str, photo: Callable[[tuple[int, int]], Path]) -> None:
+    """The command line of a detector benchmark on one rendered photo: ``--runs`` and ``--size``, then the table."""
+    parser = argparse.ArgumentParser(description=doc.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--size", default="4000x3000")
+    args = parser.parse_args()
+    size = parse_size(args.size)
+    target = photo(size)
+    runs = fresh_runs(child, target, args.runs)
+    print(f"{name} on {target.name} ({size[0]}x{size[1]}), {args.runs} runs, score {runs[0]['score']}")
+    print_stages(runs)

@@ -1,0 +1,44 @@
+"""Hook implementations of the dq plugin (entry point ``dq``)."""
+
+from __future__ import annotations
+
+from forensics_core import hookimpl
+
+from .detector import NAME, SPEC, analyse
+
+
+@hookimpl
+def forensics_register_detectors():
+    return [SPEC]
+
+
+@hookimpl
+def forensics_analyze(detector, evidence, params):
+    if detector != NAME:
+        return None
+    return analyse(evidence, params)
+
+
+@hookimpl
+def forensics_report_section(finding, evidence):
+    if finding.name != NAME or "frequencies" not in finding.details:
+        return None
+    from .section import report_section
+
+    return report_section(finding, evidence)
+
+
+@hookimpl
+def forensics_localize(finding, shape):
+    if finding.name != NAME:
+        return None
+    from .detector import regions_mask
+
+    return regions_mask(finding.details, shape)
+
+
+@hookimpl
+def forensics_synthetic_cases(seed, count):
+    from .synth import synthetic_cases
+
+    return synthetic_cases(seed, count)
