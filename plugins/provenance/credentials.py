@@ -1,0 +1,148 @@
+"""Reading and validating C2PA Content Credentials with c2pa-python (the Content Authenticity Initiative's bindings).
+
+The reader never goes to the network: fetching remote manifests and OCSP
+responses is switched off, so a hostile manifest cannot make the tool call
+out and the result depends on the file alone (and on the trust anchors the
+examiner supplies).
+
+References
+----------
+.. [1] C2PA Technical Specification 2.1, Coalition for Content Provenance
+   and Authenticity, 2024 (sections 15, validation, and 18, actions).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from dataclasses import dataclass, field
+from typing import Any
+
+import c2pa
+
+MIME_TYPES = {"JPEG": "image/jpeg", "MPO": "image/jpeg", "PNG": "image/png", "TIFF": "image/tiff",
+              "WEBP": "image/webp", "HEIF": "image/heif", "AVIF": "image/avif"}
+# Codes of the C2PA validation status that mean the content or the claim
+# changed after signing (spec section 15.2), as opposed to trust or
+# informational codes.
+_BINDING = ("assertion.dataHash.mismatch", "assertion.bmffHash.mismatch", "assertion.boxesHash.mismatch",
+            "assertion.collectionHash.mismatch")
+_INTEGRITY = ("claimSignature.mismatch", "assertion.hashedURI.mismatch", "claim.missing", "claim.multiple",
+              "assertion.missing")
+AI_SOURCE_TYPES = ("trainedAlgorithmicMedia", "compositeWithTrainedAlgorithmicMedia", "algorithmicMedia",
+                   "compositeSynthetic")
+
+
+@dataclass(frozen=True)
+class Credentials:
+    """What the manifest store says and how it validated.
+
+    Attributes
+    ----------
+    state : str
+        c2pa's validation state: ``Invalid``, ``Valid`` (signatures and
+        bindings hold, signer not on a trust list) or ``Trusted``.
+    binding_broken, integrity_broken : bool
+        A hard-binding hash no longer matches the content; the claim or its
+        signature does not match itself.
+    failures : list of dict
+        Every failure code with its explanation.
+    manifests : int
+        Manifests in the store (the active one and its ingredients').
+    claim_generator : str
+    signer : dict
+        ``issuer``, ``common_name``, ``cert_serial_number``, ``alg``,
+        ``time`` as the signature states them.
+    actions : list of dict
+        ``action``, ``softwareAgent``, ``when``, ``digitalSourceType``.
+    ingredients : list of dict
+        ``title``, ``relationship``, ``format``.
+    source_types : list of str
+        Every digital source type named (IPTC vocabulary, last path part).
+    sidecar : bool
+        Read from a ``.c2pa`` file beside the photo.
+    """
+
+    state: str
+    binding_broken: bool
+    integrity_broken: bool
+    failures: list[dict[str, str]]
+    manifests: int
+    claim_generator: str
+    signer: dict[str, Any]
+    actions: list[dict[str, Any]]
+    ingredients: list[dict[str, Any]]
+    source_types: list[str] = field(default_factory=list)
+    sidecar: bool = False
+
+
+def _context(trust_anchors: str | None) -> c2pa.Context:
+    settings: dict[str, Any] = {"verify": {"remote_manifest_fetch": False, "ocsp_fetch": False}}
+    if trust_anchors:
+        settings["trust"] = {"trust_anchors": trust_anchors}
+    return c2pa.Context.from_json(json.dumps(settings))
+
+
+def _generator(manifest: dict[str, Any]) -> str:
+    info = manifest.get("claim_generator_info") or []
+    names = [" ".join(str(i.get(k, "")) for k in ("name", "version")).strip() for i in info if isinstance(i, dict)]
+    return "; ".join(n for n in names if n) or str(manifest.get("claim_generator") or "not stated")
+
+
+def _actions(manifest: dict[str, Any]) -> list[dict[str, Any]]:
+    out = []
+    for assertion in manifest.get("assertions") or []:
+        if str(assertion.get("label", "")).startswith("c2pa.actions"):
+            for a in (assertion.get("data") or {}).get("actions") or []:
+                agent = a.get("softwareAgent")
+                out.append({"action": str(a.get("action", "")),
+                            "softwareAgent": agent.get("name") if isinstance(agent, dict) else agent,
+                            "when": a.get("when"),
+                            "digitalSourceType": str(a.get("digitalSourceType") or "").rsplit("/", 1)[-1] or None})
+    return out
+
+
+def read(data: bytes, fmt: str, sidecar: bytes | None = None, trust_anchors: str | None = None) -> Credentials | None:
+    """The Content Credentials of a file's bytes, or None when it carries none.
+
+    Parameters
+    ----------
+    data : bytes
+        The evidence bytes (those that were hashed).
+    fmt : str
+        ``EvidenceInfo.format``.
+    sidecar : bytes, optional
+        A detached manifest store (``photo.c2pa``) to validate against ``data``.
+    trust_anchors : str, optional
+        PEM certificates the examiner trusts as roots; without them a valid
+        signature is ``Valid`` but never ``Trusted``.
+
+    Raises
+    ------
+    c2pa.C2paError
+        When the store is present but cannot be parsed.
+    """
+    mime = MIME_TYPES.get(fmt)
+    if mime is None:
+        return None
+    reader = c2pa.Reader.try_create(mime, io.BytesIO(data), sidecar, context=_context(trust_anchors))
+    if reader is None:
+        return None
+    with reader:
+        store = json.loads(reader.json())
+        state = str(reader.get_validation_state() or "Invalid")
+        results = reader.get_validation_results() or {}
+    active = (store.get("manifests") or {}).get(store.get("active_manifest") or "", {})
+    failures = [{"code": str(f.get("code", "")), "explanation": str(f.get("explanation", ""))}
+                for f in (results.get("activeManifest") or {}).get("failure") or []]
+    codes = {f["code"] for f in failures}
+    actions = _actions(active)
+    types = [a["digitalSourceType"] for a in actions if a["digitalSourceType"]]
+    ingredients = [{"title": i.get("title"), "relationship": i.get("relationship"), "format": i.get("format")}
+                   for i in active.get("ingredients") or []]
+    signature = active.get("signature_info") or {}
+    return Credentials(
+        state=state, binding_broken=bool(codes & set(_BINDING)), integrity_broken=bool(codes & set(_INTEGRITY)),
+        failures=failures, manifests=len(store.get("manifests") or {}), claim_generator=_generator(active),
+        signer={k: signature.get(k) for k in ("issuer", "common_name", "cert_serial_number", "alg", "time")},
+        actions=actions, ingredients=ingredients, source_types=sorted(set(types)), sidecar=sidecar is not None)
