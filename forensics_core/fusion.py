@@ -83,7 +83,7 @@ def _split(findings: Sequence[DetectorFinding]) -> tuple[list[tuple[str, float]]
 
 def _idle_note(idle: Sequence[Contribution], findings: Sequence[DetectorFinding]) -> str:
     status = {f.name: f.status.value for f in findings}
-    parts = [f"{c.detector} ({'observations only' if c.role is Role.ADVISORY else status[c.detector]})" for c in idle]
+    parts = [f"{c.detector} ({'no p-value' if c.role is Role.ADVISORY else status[c.detector]})" for c in idle]
     return f" Not counted either way: {', '.join(parts)}." if parts else ""
 
 

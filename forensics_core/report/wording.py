@@ -25,7 +25,7 @@ OUTCOME_WORDS = {
 ROLE_WORDS = {
     Role.DROVE: "drove the verdict",
     Role.COUNTED: "counted",
-    Role.ADVISORY: "observations only, not counted",
+    Role.ADVISORY: "no p-value, not counted",
     Role.NOT_COUNTED: "not counted",
 }
 

@@ -28,7 +28,7 @@ def test_bonferroni_rejects_on_the_adjusted_p_and_names_the_drivers():
     assert v.p_value == pytest.approx(0.003) and v.alpha == ALPHA
     assert roles(v) == {"lens": Role.DROVE, "grid": Role.COUNTED, "cfa": Role.COUNTED,
                         "meta": Role.ADVISORY, "broken": Role.NOT_COUNTED, "flat": Role.NOT_COUNTED}
-    assert "meta (observations only)" in v.explanation and "broken (error)" in v.explanation
+    assert "meta (no p-value)" in v.explanation and "broken (error)" in v.explanation
 
 
 def test_bonferroni_needs_each_test_below_alpha_over_m():
