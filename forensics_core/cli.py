@@ -40,6 +40,7 @@ from .signing import (
     load_key,
     write_key_files,
 )
+from .text import visible
 from .calibration import CalibrationError
 from .calibration import load as load_calibration
 from .calibration.command import calibrate_command
@@ -52,7 +53,7 @@ err_console = Console(stderr=True, highlight=False)
 
 
 def _fail_line(subject: str, reason: str) -> None:
-    err_console.print(f"forensics: error: {subject}: {reason}", markup=False, soft_wrap=True)
+    err_console.print(f"forensics: error: {visible(subject)}: {visible(reason)}", markup=False, soft_wrap=True)
 
 
 def _parse_param(text: str) -> tuple[str, str, object]:
@@ -258,7 +259,7 @@ def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params,
     with progress:
         task = progress.add_task("analysing", total=len(photos))
         for photo in photos:
-            progress.update(task, description=escape(f"analysing {photo.name}"))
+            progress.update(task, description=escape(f"analysing {visible(photo.name)}"))
             progress.refresh()
             try:
                 done = examine_photo(photo, lambda ev: output_dir_for(out_dir, photo, ev.info.sha256, used),
@@ -275,7 +276,8 @@ def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params,
             else:
                 for url in done.refused_urls:
                     _fail_line(str(done.folder), f"the PDF renderer was refused {url[:100]!r} (only data: URLs are allowed)")
-                click.echo(f"{photo}: {done.findings.verdict.label.value} -> {done.findings_path}")
+                click.echo(f"{visible(str(photo))}: {done.findings.verdict.label.value} -> "
+                           f"{visible(str(done.findings_path))}")
             progress.advance(task)
             progress.refresh()
     if failures:

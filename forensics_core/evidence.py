@@ -25,6 +25,7 @@ from PIL import ExifTags, Image, ImageFile, TiffImagePlugin, UnidentifiedImageEr
 from PIL import __version__ as _PILLOW_VERSION
 
 from . import exiftool
+from .text import visible
 from .findings import ContainedImage, EvidenceInfo, ExifSummary, GpsPosition, MetadataTag, RawTag
 
 try:
@@ -121,7 +122,9 @@ class Evidence:
         """Luma of the stored grid, shape ``(H, W)``, float64 scaled to [0, 1].
 
         Colour images use BT.601 weights; alpha is ignored; 16-bit and float
-        grids are scaled by their type's range (float grids are taken as is).
+        grids are scaled by their type's range (float grids are taken as is,
+        except values that are not finite numbers, read as 0 and stated in
+        ``info.decoder_note``).
         """
         px = self.pixels
         if px.ndim == 3:
@@ -129,6 +132,8 @@ class Evidence:
         px = np.asarray(px, dtype=np.float64)
         scale = {"uint8": 255.0, "uint16": 65535.0, "int32": 65535.0}.get(self.pixels.dtype.name, 1.0)
         out = px / scale
+        if not np.isfinite(out).all():
+            out = np.nan_to_num(out, nan=0.0, posinf=0.0, neginf=0.0)
         out.flags.writeable = False
         return out
 
@@ -172,8 +177,7 @@ def _safe_text(value: object) -> str:
     else:
         text = str(value)
     text = text.rstrip("\x00")
-    text = "".join(c if c.isprintable() else (f"\\x{ord(c):02x}" if ord(c) < 0x100 else f"\\u{ord(c):04x}")
-                   for c in text)
+    text = visible(text)
     if len(text) > _RAW_VALUE_LIMIT:
         text = text[:_RAW_VALUE_LIMIT] + f"... ({len(text)} characters)"
     return text
@@ -441,4 +445,8 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
         pixels = _pixel_array(img)
     finally:
         img.close()
+    if pixels.dtype.kind == "f" and not np.isfinite(pixels).all():
+        bad = int(pixels.size - np.isfinite(pixels).sum())
+        note = f"{bad:,} sample(s) of the stored grid are not finite numbers (NaN or infinite); the detectors read them as 0."
+        info.decoder_note = f"{info.decoder_note} {note}" if info.decoder_note else note
     return Evidence(info=info, data=data, pixels=pixels, max_pixels=max_pixels)

@@ -82,7 +82,10 @@ class Manifest:
         ValueError
             When it is not a manifest of a version this tool reads.
         """
-        doc = json.loads(data.decode("utf-8"))
+        try:
+            doc = json.loads(data.decode("utf-8"))
+        except RecursionError:
+            raise ValueError("manifest is nested too deeply to be a forensics manifest") from None
         if not isinstance(doc, dict) or doc.get("manifest_version") != MANIFEST_VERSION:
             raise ValueError("not a forensics manifest of version " + MANIFEST_VERSION)
         try:

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import asyncio
 import hashlib
+import stat
 from dataclasses import dataclass, field
 from io import BytesIO
 from pathlib import Path
@@ -175,13 +176,34 @@ def _check_files(folder: Path, manifest: Manifest, result: Verification) -> None
 
 
 def _check_evidence(evidence: Path, manifest: Manifest, result: Verification) -> None:
+    """Hash the evidence in chunks, after checking it is a regular file of the recorded size.
+
+    A FIFO would block the read and a device such as ``/dev/zero`` never
+    ends; neither can be the evidence, so both are refused before reading.
+    """
+    recorded = manifest.evidence
     try:
-        data = evidence.read_bytes()
+        st = evidence.stat()
     except OSError as exc:
         result.fail("evidence", f"cannot read {evidence}: {exc.strerror or exc}")
         return
-    recorded = manifest.evidence
-    if hashlib.sha256(data).hexdigest() != recorded.get("sha256") or hashlib.sha512(data).hexdigest() != recorded.get("sha512"):
+    if not stat.S_ISREG(st.st_mode):
+        result.fail("evidence", f"{evidence} is not a regular file")
+        return
+    if recorded.get("size") is not None and st.st_size != recorded["size"]:
+        result.fail("evidence", f"{evidence.name} has {st.st_size:,} bytes, not the {recorded['size']:,} recorded "
+                                f"for {recorded.get('name')}")
+        return
+    sha256, sha512 = hashlib.sha256(), hashlib.sha512()
+    try:
+        with evidence.open("rb") as f:
+            for chunk in iter(lambda: f.read(1 << 20), b""):
+                sha256.update(chunk)
+                sha512.update(chunk)
+    except OSError as exc:
+        result.fail("evidence", f"cannot read {evidence}: {exc.strerror or exc}")
+        return
+    if sha256.hexdigest() != recorded.get("sha256") or sha512.hexdigest() != recorded.get("sha512"):
         result.fail("evidence", f"{evidence.name} does not match the SHA-256/SHA-512 recorded for {recorded.get('name')}")
     else:
         result.passed.append(f"evidence: {evidence.name} matches SHA-256 and SHA-512")

@@ -28,6 +28,7 @@ from ..evidence import Evidence
 from ..findings import ExifSummary, Findings
 from ..fusion import LR_POLICY
 from ..plugins import PluginHost
+from ..text import visible
 from ..validation.record import ValidationRecord
 from . import images, wording
 from .error_rates import ErrorRates, given_error_rates, shipped_error_rates
@@ -160,7 +161,7 @@ def _environment() -> Environment:
     # The project's own templates: trusted, but autoescaped like everything else.
     env = Environment(loader=FunctionLoader(template_text), autoescape=True, undefined=StrictUndefined,
                       trim_blocks=True, lstrip_blocks=True)
-    env.filters.update(num=_num, pretty=_pretty, details=_details, compact=_compact, utc=_utc_text)
+    env.filters.update(num=_num, pretty=_pretty, details=_details, compact=_compact, utc=_utc_text, visible=visible)
     return env
 
 
@@ -204,9 +205,16 @@ def command_line(findings: Findings) -> str:
     for det, params in sorted((p.get("detector_params") or {}).items()):
         for key, value in sorted(params.items()):
             options.append(("--param", f"{det}.{key}={json.dumps(value, separators=(',', ':'))}"))
-    lines = [f"forensics analyze {shlex.quote(findings.evidence.path)}"]
-    lines += [f"{flag} {shlex.quote(value)}" for flag, value in options]
+    lines = [f"forensics analyze {_shell_quote(findings.evidence.path)}"]
+    lines += [f"{flag} {_shell_quote(value)}" for flag, value in options]
     return " \\\n    ".join(lines)
+
+
+def _shell_quote(text: str) -> str:
+    """POSIX quoting, or bash's ``$'...'`` with escapes when the text holds characters a page cannot show."""
+    if visible(text) == text:
+        return shlex.quote(text)
+    return "$'" + visible(text.replace("\\", "\\\\").replace("'", "\\'")) + "'"
 
 
 def _summary(findings: Findings) -> dict[str, Any]:

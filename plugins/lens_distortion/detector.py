@@ -22,6 +22,10 @@ from .geometry import norm_scale, to_normalised
 from .k1 import k1_paper, signed_distance, trim_to_shortest
 from .lines import DistortedLine, extract_lines
 
+# Lines of at least min_length_fraction (5 %) of a side need some tens of
+# edge points each; below this size there are none worth fitting.
+MIN_SIDE_PX = 64
+
 NAME = "lens_distortion"
 VERSION = "0.2.0"
 
@@ -225,6 +229,10 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
         ``score = 1 - p``; ``inconclusive`` when too few informative lines.
     """
     shape = luma.shape[:2]
+    if min(shape) < MIN_SIDE_PX:
+        return DetectorResult(Status.INCONCLUSIVE, f"Inconclusive: the photo ({shape[1]} x {shape[0]} pixels) is too "
+                              f"small to hold lines long enough to measure distortion (at least {MIN_SIDE_PX} pixels "
+                              f"a side).", details={"image_size": [shape[1], shape[0]]})
     timer = _Timer({})
     t = time.perf_counter()
     edges = subpixel_edges(luma, sigma=float(params["sigma"]))

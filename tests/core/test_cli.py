@@ -6,6 +6,8 @@ import os
 import subprocess
 import sys
 
+import numpy as np
+from PIL import Image
 from test_evidence import bad_inputs
 
 FORENSICS = [sys.executable, "-m", "forensics_core"]
@@ -83,3 +85,35 @@ def test_internal_errors_are_one_line(tmp_path, photo):
     assert out.returncode != 0
     assert "Traceback" not in out.stderr
     assert len(out.stderr.strip().splitlines()) == 1
+
+
+def test_a_one_pixel_photo_and_a_float_tiff_with_nan_are_inconclusive_in_silence(tmp_path):
+    tiny, nan = tmp_path / "one.png", tmp_path / "nan.tif"
+    Image.fromarray(np.zeros((1, 1), np.uint8)).save(tiny)
+    grid = np.random.default_rng(0).random((64, 64)).astype(np.float32)
+    grid[10:20, 10:20] = np.nan
+    Image.fromarray(grid, mode="F").save(nan)
+    out = run("analyze", tiny, nan, "--out", tmp_path / "out", "--format", "json")
+    assert out.returncode == 0, out.stderr
+    assert out.stderr.strip() == "", out.stderr
+    for stem in ("one", "nan"):
+        findings = json.loads((tmp_path / "out" / stem / "findings.json").read_text())
+        status = {d["name"]: d["status"] for d in findings["detectors"]}
+        assert status["lens_distortion"] == "inconclusive" and "error" not in status.values(), status
+    note = json.loads((tmp_path / "out" / "nan" / "findings.json").read_text())["evidence"]["decoder_note"]
+    assert "100 sample(s)" in note and "read them as 0" in note
+
+
+def test_control_and_bidirectional_characters_in_names_are_shown_escaped(tmp_path, data_dir):
+    hostile = tmp_path / "photo\x1b[31m\u202egpj\nx.jpg"
+    hostile.write_bytes((data_dir / "exif" / "Canon_40D.jpg").read_bytes())
+    out = run("analyze", hostile, "--out", tmp_path / "out", "--format", "html", "--detectors", "metadata")
+    assert out.returncode == 0, out.stderr
+    assert "\x1b" not in out.stdout + out.stderr and "\u202e" not in out.stdout
+    (line,) = [x for x in out.stdout.splitlines() if "photo" in x]
+    assert "photo\\x1b[31m\\u202egpj\\x0ax.jpg" in line
+    (report,) = (tmp_path / "out").rglob("report.html")
+    html = report.read_text(encoding="utf-8")
+    assert "\u202e" not in html and "\\u202egpj" in html
+    missing = run("analyze", tmp_path / "gone\x1b[2J.jpg", "--out", tmp_path / "out2")
+    assert missing.returncode != 0 and "\x1b" not in missing.stderr and "gone\\x1b[2J.jpg" in missing.stderr

@@ -220,3 +220,34 @@ def test_json_only_needs_no_key(tmp_path, data_dir, isolated_home):
     assert out.returncode == 0
     assert sorted(p.name for p in (tmp_path / "o" / "Canon_40D").iterdir()) == ["findings.json"]
     assert not isolated_home.exists()
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device", "other_size"])
+def test_verify_evidence_reads_only_a_regular_file_of_the_recorded_size(bundle, tmp_path, kind):
+    import os
+
+    if kind == "fifo":
+        target = tmp_path / "evidence.jpg"
+        os.mkfifo(target)
+    elif kind == "device":
+        target = Path("/dev/zero")
+    else:
+        target = tmp_path / "evidence.jpg"
+        target.write_bytes(b"\xff" * 1000)
+    out = run("verify", bundle, "--evidence", target)
+    assert out.returncode == 1, out.stdout + out.stderr
+    expected = "bytes, not the" if kind == "other_size" else "is not a regular file"
+    assert expected in out.stdout + out.stderr and "Traceback" not in out.stderr
+
+
+def test_a_manifest_nested_100000_deep_is_one_line(bundle_copy):
+    from forensics_core.manifest import Manifest
+
+    nested = b"[" * 100_000 + b"]" * 100_000
+    with pytest.raises(ValueError, match="nested too deeply"):
+        Manifest.from_bytes(nested)
+    (bundle_copy / MANIFEST_NAME).write_bytes(nested)
+    out = run("verify", bundle_copy)
+    assert out.returncode == 1
+    assert "RecursionError" not in out.stdout + out.stderr and "internal error" not in out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1, out.stderr
