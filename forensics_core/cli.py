@@ -24,7 +24,7 @@ from rich.table import Table
 from . import ENTRY_POINT_GROUP, __version__
 from .analysis import DEFAULT_TIMEOUT_S, ISOLATIONS, Options, resolve_params
 from .evidence import DEFAULT_MAX_PIXELS, EvidenceError
-from .output import ReportError, ReportSettings, examine_photo, output_dir_for
+from .output import ReportError, ReportSettings, examine_photo, expected_files, place_outputs
 from .plugins import PluginHost, one_line
 from .report.render import PAPER_SIZES, ReportOptions
 from .signing import (
@@ -235,14 +235,21 @@ def _prepare_run(host: PluginHost, detectors, formats, params, timeout, max_pixe
 @cli.command()
 @click.argument("photos", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
-              help="Output folder; each photo gets OUT/<photo stem>/.")
+              help="Output folder; each photo gets OUT/<photo stem>/ (or <stem>-<SHA-256 prefix>/ when that holds "
+                   "another photo's or other settings' outputs).")
+@click.option("--force", is_flag=True, help="Replace, as a whole, a bundle this photo already has in OUT.")
 @_run_options
 @click.pass_context
-def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params, timeout, max_pixels, fusion, isolation,
-            exhibit_id, organisation, key_path, paper, tsa_url, validation_path, calibration_path):
+def analyze(ctx, photos, out_dir, force, detectors, formats, case_id, examiner, params, timeout, max_pixels, fusion,
+            isolation, exhibit_id, organisation, key_path, paper, tsa_url, validation_path, calibration_path):
     """Analyse PHOTO... and write OUT/<photo stem>/findings.json for each,
     with the signed report (report.html, report.pdf, manifest.json and its
     signature) beside it.
+
+    A folder holding another photo's outputs, or this photo's made with other
+    settings, is never written: the photo gets OUT/<stem>-<SHA-256 prefix>/.
+    When this photo's outputs with the same settings are already there they
+    are kept as they are; --force replaces them.
 
     Exits 0 when every photo was analysed, whatever the verdict; 1 when some
     photo could not be taken in or its outputs could not be written.
@@ -254,6 +261,7 @@ def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params,
 
     failures = 0
     used: set[str] = set()
+    files = expected_files(report)
     progress = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                         console=err_console, auto_refresh=False, transient=True, disable=len(photos) < 2)
     with progress:
@@ -262,7 +270,7 @@ def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params,
             progress.update(task, description=escape(f"analysing {visible(photo.name)}"))
             progress.refresh()
             try:
-                done = examine_photo(photo, lambda ev: output_dir_for(out_dir, photo, ev.info.sha256, used),
+                done = examine_photo(photo, lambda ev, fi: place_outputs(out_dir, photo, fi, files, used, force),
                                      host, options, report)
             except EvidenceError as exc:
                 failures += 1
@@ -276,7 +284,8 @@ def analyze(ctx, photos, out_dir, detectors, formats, case_id, examiner, params,
             else:
                 for url in done.refused_urls:
                     _fail_line(str(done.folder), f"the PDF renderer was refused {url[:100]!r} (only data: URLs are allowed)")
-                click.echo(f"{visible(str(photo))}: {done.findings.verdict.label.value} -> "
+                kept = " (kept: already analysed with these settings; --force replaces it)" if done.kept else ""
+                click.echo(f"{visible(str(photo))}: {done.findings.verdict.label.value}{kept} -> "
                            f"{visible(str(done.findings_path))}")
             progress.advance(task)
             progress.refresh()

@@ -3,7 +3,9 @@ the per-photo unit of work that ``analyze`` and ``batch`` share."""
 
 from __future__ import annotations
 
+import json
 import os
+import shutil
 import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -22,12 +24,72 @@ if TYPE_CHECKING:
 FINDINGS_NAME = "findings.json"
 
 
-def output_dir_for(out_dir: Path, photo: Path, sha256: str, used: set[str]) -> Path:
-    """``out_dir/<photo stem>``, or ``<stem>-<first 12 hex of sha256>`` when the stem is taken in this run."""
+@dataclass(frozen=True)
+class Placement:
+    """Where one photo's outputs go.
+
+    Attributes
+    ----------
+    folder : Path
+    action : {"new", "kept", "replace"}
+        ``new``: an empty or absent folder; ``kept``: it already holds this
+        photo's outputs made with the same settings, left untouched;
+        ``replace``: it holds this photo's outputs and ``--force`` asked for
+        them to be replaced, as a whole and atomically.
+    """
+
+    folder: Path
+    action: str = "new"
+
+
+def _prior(folder: Path) -> tuple[str | None, object, set[str]] | None:
+    """(evidence SHA-256, parameters, file names) of the outputs in ``folder``; None when it holds no findings."""
+    try:
+        doc = json.loads((folder / FINDINGS_NAME).read_text(encoding="utf-8"))
+        return doc["evidence"]["sha256"], doc.get("parameters"), {p.name for p in folder.iterdir()}
+    except (OSError, ValueError, KeyError, TypeError, RecursionError):
+        return None
+
+
+def place_outputs(out_dir: Path, photo: Path, findings: Findings, files: set[str], used: set[str],
+                  force: bool = False) -> Placement:
+    """The folder for one photo's outputs, never one that holds another photo's or other settings' outputs.
+
+    Tried in turn: ``<stem>``, ``<stem>-<first 12 hex of SHA-256>``, then
+    that with ``-2``, ``-3``, ... A folder that is absent or empty is taken;
+    one holding this photo's outputs with the same parameters and at least
+    ``files`` is kept as it is (or replaced with ``force``); anything else
+    (another photo, other settings, unreadable findings, stray files) is
+    passed over.
+    """
+    sha = findings.evidence.sha256
     stem = photo.stem or "photo"
-    name = stem if stem not in used else f"{stem}-{sha256[:12]}"
-    used.add(name)
-    return out_dir / name
+    names = [stem, f"{stem}-{sha[:12]}"] + [f"{stem}-{sha[:12]}-{i}" for i in range(2, 1000)]
+    for name in names:
+        if name in used:
+            continue
+        folder = out_dir / name
+        if not folder.exists() or (folder.is_dir() and not any(folder.iterdir())):
+            used.add(name)
+            return Placement(folder)
+        prior = _prior(folder) if folder.is_dir() else None
+        if prior is None or prior[0] != sha:
+            continue
+        same = prior[1] == json.loads(findings.to_json())["parameters"] and files <= prior[2]
+        if force or same:
+            used.add(name)
+            return Placement(folder, "replace" if force else "kept")
+    raise OSError(f"no free output folder for {stem} in {out_dir}")
+
+
+def expected_files(report: ReportSettings | None) -> set[str]:
+    """The names a run writes into each photo's folder."""
+    from .manifest import HTML_NAME, MANIFEST_NAME, PDF_NAME
+
+    if report is None:
+        return {FINDINGS_NAME}
+    return {FINDINGS_NAME, MANIFEST_NAME} | {HTML_NAME for f in report.formats if f == "html"} | \
+        {PDF_NAME for f in report.formats if f == "pdf"}
 
 
 def write_atomic(path: Path, data: bytes) -> Path:
@@ -82,12 +144,13 @@ class ReportSettings:
 
 @dataclass
 class Examined:
-    """One photo analysed and written: its findings, folder and the URLs the PDF renderer refused."""
+    """One photo analysed and written (or ``kept``: its outputs were already there): findings, folder, refused URLs."""
 
     findings: Findings
     folder: Path
     findings_path: Path
     refused_urls: list[str] = field(default_factory=list)
+    kept: bool = False
 
 
 def write_report(findings: Findings, evidence: Evidence, folder: Path, host: PluginHost,
@@ -115,7 +178,7 @@ def write_report(findings: Findings, evidence: Evidence, folder: Path, host: Plu
     return list(result.refused_urls)
 
 
-def examine_photo(photo: Path, folder_for: Callable[[Evidence], Path], host: PluginHost, options: Options,
+def examine_photo(photo: Path, place: Callable[[Evidence, Findings], Placement], host: PluginHost, options: Options,
                   report: ReportSettings | None = None) -> Examined:
     """Take in ``photo``, run the detectors and write ``findings.json`` (and the report) into its folder.
 
@@ -123,9 +186,10 @@ def examine_photo(photo: Path, folder_for: Callable[[Evidence], Path], host: Plu
     ----------
     photo : Path
         The evidence file (read, never written).
-    folder_for : callable
-        Gives the output folder once the evidence is loaded (its hash may
-        choose the name); it may raise to refuse the evidence.
+    place : callable
+        Gives the :class:`Placement` once the evidence is loaded and analysed
+        (its hash and the findings' parameters may choose it); it may raise
+        to refuse the evidence.
     host : PluginHost
     options : Options
     report : ReportSettings, optional
@@ -142,7 +206,25 @@ def examine_photo(photo: Path, folder_for: Callable[[Evidence], Path], host: Plu
     """
     evidence = load_evidence(photo, max_pixels=options.max_pixels)
     findings = analyze_evidence(evidence, host, options)
-    folder = folder_for(evidence)
-    path = write_findings(findings, folder)
-    refused = write_report(findings, evidence, folder, host, report) if report is not None else []
-    return Examined(findings, folder, path, refused)
+    placement = place(evidence, findings)
+    folder = placement.folder
+    if placement.action == "kept":
+        return Examined(findings, folder, folder / FINDINGS_NAME, kept=True)
+    if placement.action == "replace":
+        # The new bundle is made whole beside the old one, then swapped in,
+        # so an interruption leaves one complete bundle, never a mixture.
+        folder = Path(tempfile.mkdtemp(prefix=f".{placement.folder.name}.new-", dir=placement.folder.parent))
+    try:
+        path = write_findings(findings, folder)
+        refused = write_report(findings, evidence, folder, host, report) if report is not None else []
+    except BaseException:
+        if placement.action == "replace":
+            shutil.rmtree(folder, ignore_errors=True)
+        raise
+    if placement.action == "replace":
+        old = Path(tempfile.mkdtemp(prefix=f".{placement.folder.name}.old-", dir=placement.folder.parent))
+        placement.folder.rename(old / "bundle")
+        folder.rename(placement.folder)
+        shutil.rmtree(old, ignore_errors=True)
+        path = placement.folder / FINDINGS_NAME
+    return Examined(findings, placement.folder, path, refused)

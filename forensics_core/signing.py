@@ -15,7 +15,6 @@ certificate is self-signed.
 from __future__ import annotations
 
 import asyncio
-import getpass
 import os
 from dataclasses import dataclass
 from datetime import datetime, timedelta, timezone
@@ -198,6 +197,9 @@ def load_key(path: Path, password: bytes | None) -> ExaminerKey:
     return ExaminerKey(cert=cert, pkcs12_data=data, password=password, source=str(path))
 
 
+UNNAMED_EXAMINER = "unnamed examiner"
+
+
 def default_key_path() -> Path:
     return config_dir() / f"{DEFAULT_KEY_NAME}.p12"
 
@@ -212,7 +214,9 @@ def default_key(examiner: str | None = None, organisation: str | None = None,
     path = default_key_path()
     if path.exists():
         return load_key(path, password)
-    name = examiner or getpass.getuser() or "examiner"
+    # A login name ("root") is not an examiner's identity: a key made without
+    # one says so, and reports signed with it say no examiner is named.
+    name = examiner or UNNAMED_EXAMINER
     p12, cert = create_self_signed(name, organisation or "unspecified organisation (trial key)")
     try:
         write_key_files(path.parent, p12, cert)

@@ -86,9 +86,11 @@ def discover(inputs: Sequence[Path], out_dir: Path, recursive: bool = False) -> 
 
 
 def _folder_files(folder: Path, recursive: bool) -> Iterable[Path]:
+    """Every entry of the folder that is not a folder: FIFOs, devices and broken links too, so that each is
+    listed as failed with its reason instead of passed over in silence."""
     if not recursive:
         try:
-            names = sorted(e.name for e in os.scandir(folder) if not _is_hidden(e.name) and e.is_file())
+            names = sorted(e.name for e in os.scandir(folder) if not _is_hidden(e.name) and not e.is_dir())
         except OSError:
             return []
         return [folder / n for n in names]
@@ -96,7 +98,7 @@ def _folder_files(folder: Path, recursive: bool) -> Iterable[Path]:
     for root, dirs, names in os.walk(folder):
         dirs[:] = sorted(d for d in dirs if not _is_hidden(d))
         base = Path(root)
-        files.extend(base / n for n in sorted(names) if not _is_hidden(n) and (base / n).is_file())
+        files.extend(base / n for n in sorted(names) if not _is_hidden(n))
     return files
 
 

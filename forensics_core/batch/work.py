@@ -21,7 +21,8 @@ from typing import Any
 
 from ..analysis import Options
 from ..evidence import Evidence, EvidenceError
-from ..output import ReportError, ReportSettings, examine_photo
+from ..findings import Findings
+from ..output import Placement, ReportError, ReportSettings, examine_photo
 from ..plugins import PluginHost, one_line
 from ..report.render import ReportOptions
 from ..signing import PASSWORD_ENV, ExaminerKey, SigningError, load_key
@@ -139,12 +140,12 @@ def process_photo(job: Job, settings: Settings) -> PhotoOutcome:
     started = time.perf_counter()
     folder = Path(job.folder)
 
-    def folder_for(evidence: Evidence) -> Path:
+    def place(evidence: Evidence, findings: Findings) -> Placement:
         if evidence.info.sha256 != job.sha256:
             raise EvidenceError("changed while the batch ran (its SHA-256 is not the one taken at the start)")
         folder.mkdir(parents=True, exist_ok=True)
         start_fresh(folder)
-        return folder
+        return Placement(folder)
 
     done = None
     error: str | None = None
@@ -155,7 +156,7 @@ def process_photo(job: Job, settings: Settings) -> PhotoOutcome:
         if settings.report_formats:
             report = ReportSettings(_key(settings), settings.report_formats, settings.report_options,
                                     settings.organisation, settings.tsa_url)
-        done = examine_photo(Path(job.path), folder_for, _host(), settings.options, report)
+        done = examine_photo(Path(job.path), place, _host(), settings.options, report)
     except EvidenceError as exc:
         error = str(exc)
     except SigningError as exc:

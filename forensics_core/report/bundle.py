@@ -24,7 +24,7 @@ from ..manifest import (HTML_NAME, MANIFEST_NAME, PDF_NAME, SIGNATURE_NAME, SIGN
                         evidence_entry, file_entries)
 from ..output import FINDINGS_NAME, write_atomic
 from ..plugins import PluginHost
-from ..signing import ExaminerKey, sign_detached, sign_pdf
+from ..signing import UNNAMED_EXAMINER, ExaminerKey, sign_detached, sign_pdf
 from .render import ReportOptions, SignatureInfo, render_html, render_pdf
 
 REPORT_FORMATS = ("html", "pdf")
@@ -47,8 +47,10 @@ def signature_info(key: ExaminerKey, examiner: str | None, organisation: str | N
     from cryptography.x509.oid import NameOID
 
     cn = key.cert.subject.get_attributes_for_oid(NameOID.COMMON_NAME)
+    named = str(cn[0].value) if cn and str(cn[0].value) != UNNAMED_EXAMINER else None
     return SignatureInfo(
-        examiner=examiner or (str(cn[0].value) if cn else "not given"),
+        examiner=examiner or named or ("not named: the signing key names no examiner (give --examiner, or make a key "
+                                       "with forensics keys create)"),
         organisation=organisation or key.organisation or "not given",
         subject=key.subject,
         fingerprint=key.fingerprint,

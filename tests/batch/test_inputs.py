@@ -3,6 +3,8 @@
 import hashlib
 import os
 
+import pytest
+
 from forensics_core.batch.inputs import discover, hash_all, sha256_of
 
 
@@ -47,3 +49,17 @@ def test_hashes_match_hashlib_and_unreadable_inputs_say_why(tmp_path):
     photos = list(hash_all([(photo, None), (tmp_path / "x", "no such file or folder")]))
     assert [p.path for p in photos] == [photo, tmp_path / "x"]
     assert photos[1].error == "no such file or folder" and photos[1].sha256 is None
+
+
+@pytest.mark.parametrize("recursive", [False, True])
+def test_fifos_and_links_to_devices_in_a_folder_are_listed_not_skipped(tmp_path, recursive):
+
+    (tmp_path / "a.jpg").write_bytes(b"\xff\xd8")
+    os.mkfifo(tmp_path / "pipe.jpg")
+    (tmp_path / "zero.jpg").symlink_to("/dev/zero")
+    (tmp_path / "broken.jpg").symlink_to(tmp_path / "nowhere")
+    found = {p.name for p, _ in discover([tmp_path], tmp_path / "out", recursive)}
+    assert found == {"a.jpg", "pipe.jpg", "zero.jpg", "broken.jpg"}
+    errors = {p.name: sha256_of(p).error for p, _ in discover([tmp_path], tmp_path / "out", recursive)}
+    assert errors["pipe.jpg"] == errors["zero.jpg"] == "is not a regular file"
+    assert errors["broken.jpg"] == "no such file" and errors["a.jpg"] is None

@@ -117,3 +117,29 @@ def test_control_and_bidirectional_characters_in_names_are_shown_escaped(tmp_pat
     assert "\u202e" not in html and "\\u202egpj" in html
     missing = run("analyze", tmp_path / "gone\x1b[2J.jpg", "--out", tmp_path / "out2")
     assert missing.returncode != 0 and "\x1b" not in missing.stderr and "gone\\x1b[2J.jpg" in missing.stderr
+
+
+def test_analyze_never_writes_into_another_photos_or_other_settings_bundle(tmp_path, data_dir):
+    a, b = tmp_path / "A" / "photo.jpg", tmp_path / "B" / "photo.jpg"
+    for path, source in ((a, "Canon_40D.jpg"), (b, "87_OSError.jpg")):
+        path.parent.mkdir()
+        path.write_bytes((data_dir / "exif" / source).read_bytes())
+    out = tmp_path / "out"
+    base = ["--out", out, "--detectors", "metadata"]
+    assert run("analyze", a, *base).returncode == 0
+    first = {p.name: p.read_bytes() for p in (out / "photo").iterdir()}
+    assert run("analyze", b, *base).returncode == 0
+    sha_b = hashlib.sha256(b.read_bytes()).hexdigest()
+    assert (out / f"photo-{sha_b[:12]}" / "manifest.json").exists()
+    assert {p.name: p.read_bytes() for p in (out / "photo").iterdir()} == first, "A's bundle was touched"
+    again = run("analyze", a, *base, "--format", "json")
+    assert again.returncode == 0 and "kept" in again.stdout
+    assert {p.name: p.read_bytes() for p in (out / "photo").iterdir()} == first, "a signed bundle was rewritten"
+    other = run("analyze", a, *base, "--param", "metadata.datetime_tolerance_s=5")
+    sha_a = hashlib.sha256(a.read_bytes()).hexdigest()
+    assert other.returncode == 0 and f"photo-{sha_a[:12]}" in other.stdout
+    forced = run("analyze", a, *base, "--force")
+    assert forced.returncode == 0 and "kept" not in forced.stdout
+    assert (out / "photo" / "findings.json").read_bytes() != first["findings.json"]
+    assert run("verify", out / "photo", "--evidence", a).returncode == 0
+    assert not [p for p in out.iterdir() if p.name.startswith(".")], "staging folders left behind"

@@ -251,3 +251,16 @@ def test_a_manifest_nested_100000_deep_is_one_line(bundle_copy):
     assert out.returncode == 1
     assert "RecursionError" not in out.stdout + out.stderr and "internal error" not in out.stderr
     assert len(out.stderr.strip().splitlines()) == 1, out.stderr
+
+
+def test_without_a_named_examiner_the_report_says_so_instead_of_a_login(tmp_path, data_dir, isolated_home):
+    photo = data_dir / "exif" / "Canon_40D.jpg"
+    out = run("analyze", photo, "--out", tmp_path / "a", "--detectors", "", "--format", "html")
+    assert out.returncode == 0, out.stderr
+    html = (tmp_path / "a" / "Canon_40D" / "report.html").read_text(encoding="utf-8")
+    assert "not named: the signing key names no examiner" in html
+    cert = (isolated_home / "examiner.pem").read_text()
+    from cryptography import x509
+
+    subject = x509.load_pem_x509_certificate(cert.encode()).subject.rfc4514_string()
+    assert "CN=unnamed examiner" in subject and "CN=root" not in subject
