@@ -281,6 +281,11 @@ def analyze(ctx, photos, out_dir, force, detectors, formats, case_id, examiner, 
             except ReportError as exc:
                 failures += 1
                 _fail_line(str(photo), f"cannot write the report: {exc}")
+            except Exception as exc:  # a bug must cost this photo only, not the others
+                if os.environ.get("FORENSICS_DEBUG"):
+                    raise
+                failures += 1
+                _fail_line(str(photo), f"internal error: {one_line(exc)} (set FORENSICS_DEBUG=1 for the traceback)")
             else:
                 for url in done.refused_urls:
                     _fail_line(str(done.folder), f"the PDF renderer was refused {url[:100]!r} (only data: URLs are allowed)")

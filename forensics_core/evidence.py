@@ -417,7 +417,13 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise EvidenceError(f"corrupt or truncated image: {reason}") from None
 
-    exif = _read_exif(img)
+    try:
+        exif = _read_exif(img)
+    except (SyntaxError, ValueError, TypeError, KeyError, IndexError, OSError, EOFError, struct.error,
+            ZeroDivisionError, RecursionError) as exc:
+        # Broken EXIF is an observation about the file, not a reason to stop.
+        reason = str(exc).splitlines()[0][:200] if str(exc) else type(exc).__name__
+        exif = ExifSummary(unreadable=f"EXIF unreadable: {_safe_text(reason)}")
     metadata, reader = _metadata(data)
     quant = getattr(img, "quantization", None) or {}
     info = EvidenceInfo(

@@ -246,7 +246,8 @@ class MetadataTag:
 
 @dataclass
 class ExifSummary:
-    """The EXIF fields examiners read first, plus every tag in ``raw``."""
+    """The EXIF fields examiners read first, plus every tag in ``raw``; ``unreadable`` says why EXIF could not be
+    parsed (the photo is still analysed)."""
 
     make: str | None = None
     model: str | None = None
@@ -263,6 +264,7 @@ class ExifSummary:
     gps: GpsPosition | None = None
     thumbnail_present: bool = False
     raw: list[RawTag] = field(default_factory=list)
+    unreadable: str | None = None
 
 
 @dataclass

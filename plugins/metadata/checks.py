@@ -81,6 +81,11 @@ def exif_presence(info: EvidenceInfo) -> Check:
     """Whether the file carries EXIF at all, and whether it names a camera."""
     title = "EXIF present"
     exif = info.exif
+    if exif.unreadable:
+        # A camera writes well-formed EXIF; a broken header is a note, not a
+        # suspicion: storage faults and careless tools break it too.
+        return Check("exif_present", title, "note", f"{exif.unreadable}: a camera writes well-formed EXIF, so the "
+                     "file is not as the camera wrote it, which says nothing by itself about the pixels.")
     if not exif.raw:
         # Not "suspicious": messengers, social networks, web uploads and
         # research data sets strip EXIF from authentic photos routinely (every

@@ -143,3 +143,18 @@ def test_analyze_never_writes_into_another_photos_or_other_settings_bundle(tmp_p
     assert (out / "photo" / "findings.json").read_bytes() != first["findings.json"]
     assert run("verify", out / "photo", "--evidence", a).returncode == 0
     assert not [p for p in out.iterdir() if p.name.startswith(".")], "staging folders left behind"
+
+
+def test_one_changed_byte_in_the_exif_header_is_an_observation_and_stops_nothing(tmp_path, data_dir):
+    good = data_dir / "exif" / "Canon_40D.jpg"
+    data = bytearray(good.read_bytes())
+    data[data.find(b"Exif\x00\x00") + 6] = 0x94  # the TIFF byte order mark
+    bad = tmp_path / "bad.jpg"
+    bad.write_bytes(bytes(data))
+    out = run("analyze", bad, good, "--out", tmp_path / "out", "--format", "json")
+    assert out.returncode == 0, out.stderr
+    assert "internal error" not in out.stderr and len(out.stdout.strip().splitlines()) == 2
+    findings = json.loads((tmp_path / "out" / "bad" / "findings.json").read_text())
+    assert findings["evidence"]["exif"]["unreadable"].startswith("EXIF unreadable: not a TIFF file")
+    checks = {c["id"]: c for d in findings["detectors"] if d["name"] == "metadata" for c in d["details"]["checks"]}
+    assert checks["exif_present"]["outcome"] == "note" and "EXIF unreadable" in checks["exif_present"]["observation"]
