@@ -11,6 +11,7 @@ could not be taken in or written; 2 wrong usage; 3 internal error.
 from __future__ import annotations
 
 import json
+import logging
 import os
 import sys
 from pathlib import Path
@@ -431,17 +432,31 @@ def keys_create(name, organisation, out_dir, key_type):
 @click.option("--trust", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="Certificate (PEM or DER) the signatures must chain to. Without it the signer's own "
                    "certificate is the anchor: integrity is checked, identity is not.")
-def verify_command(folder, evidence, trust):
+@click.option("--verbose", is_flag=True, help="Also print the signature libraries' own log messages.")
+def verify_command(folder, evidence, trust, verbose):
     """Check a report folder: both signatures, every file's hash, and the evidence.
 
     Prints one line per failed check on stderr and exits 1 if any failed.
     """
     from .verify import verify_bundle
 
+    # pyHanko logs each failed path search with its traceback; the verdict
+    # below already says what failed, in one line.
+    captured = _CapturedLogs()
+    root = logging.getLogger()
+    previous, handlers = root.level, list(root.handlers)
+    root.handlers = [captured]
+    root.setLevel(logging.DEBUG if verbose else logging.WARNING)
     try:
         result = verify_bundle(folder, evidence=evidence, trust=trust)
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="--trust") from None
+    finally:
+        root.handlers = handlers
+        root.setLevel(previous)
+    if verbose:
+        for record in captured.records:
+            click.echo(f"log: {record.name}: {record.getMessage()}", err=True)
     for line in result.passed:
         click.echo(f"ok: {line}")
     for note in result.notes:
@@ -451,6 +466,17 @@ def verify_command(folder, evidence, trust):
     if not result.ok:
         sys.exit(1)
     click.echo(f"verified: {folder}")
+
+
+class _CapturedLogs(logging.Handler):
+    """Keeps library log records for ``--verbose`` instead of letting them reach the terminal."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.DEBUG)
+        self.records: list[logging.LogRecord] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.records.append(record)
 
 
 def main() -> None:

@@ -264,3 +264,26 @@ def test_without_a_named_examiner_the_report_says_so_instead_of_a_login(tmp_path
 
     subject = x509.load_pem_x509_certificate(cert.encode()).subject.rfc4514_string()
     assert "CN=unnamed examiner" in subject and "CN=root" not in subject
+
+
+def test_verify_prints_one_line_per_failure_and_no_library_traceback(bundle_copy, tmp_path, key_files):
+    from pyhanko.pdf_utils import generic
+    from pyhanko.pdf_utils.incremental_writer import IncrementalPdfFileWriter
+
+    other = tmp_path / "other.pem"
+    subprocess.run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-keyout", str(tmp_path / "k.pem"),
+                    "-out", str(other), "-subj", "/CN=other", "-days", "2"], check=True, capture_output=True)
+    untrusted = run("verify", bundle_copy, "--trust", other)
+    assert untrusted.returncode == 1 and "Traceback" not in untrusted.stderr
+    assert all(line.startswith("forensics: error: ") for line in untrusted.stderr.strip().splitlines())
+    assert "log:" in run("verify", bundle_copy, "--trust", other, "--verbose").stderr
+    pdf = bundle_copy / "report.pdf"
+    writer = IncrementalPdfFileWriter(BytesIO(pdf.read_bytes()))
+    writer.root["/Lang"] = generic.TextStringObject("fr")
+    writer.update_root()
+    out = BytesIO()
+    writer.write(out)
+    pdf.write_bytes(out.getvalue())
+    updated = run("verify", bundle_copy)
+    assert updated.returncode == 1 and "Traceback" not in updated.stderr
+    assert all(line.startswith("forensics: error: ") for line in updated.stderr.strip().splitlines())
