@@ -290,6 +290,9 @@ def analyze(ctx, photos, out_dir, force, detectors, formats, case_id, examiner, 
             else:
                 for url in done.refused_urls:
                     _fail_line(str(done.folder), f"the PDF renderer was refused {url[:100]!r} (only data: URLs are allowed)")
+                if done.findings.evidence.changed_during_analysis:
+                    failures += 1
+                    _fail_line(str(photo), done.findings.evidence.changed_during_analysis)
                 kept = " (kept: already analysed with these settings; --force replaces it)" if done.kept else ""
                 click.echo(f"{visible(str(photo))}: {done.findings.verdict.label.value}{kept} -> "
                            f"{visible(str(done.findings_path))}")

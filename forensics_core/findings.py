@@ -295,6 +295,10 @@ class EvidenceInfo:
     ``metadata`` holds every tag ExifTool read, by group, and
     ``metadata_reader`` names the reader and its arguments, or says why
     Pillow's EXIF reading (``exif.raw``) is all there is.
+    ``changed_during_analysis`` is set when the file on disk no longer had
+    the hashed bytes after the detectors ran (a plugin or another program
+    wrote to it): the findings are then of the bytes as hashed, and the
+    evidence must be secured again.
     """
 
     path: str
@@ -317,6 +321,7 @@ class EvidenceInfo:
     decoder_note: str | None = None
     metadata: list[MetadataTag] = field(default_factory=list)
     metadata_reader: str | None = None
+    changed_during_analysis: str | None = None
 
 
 @dataclass

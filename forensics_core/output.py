@@ -3,6 +3,7 @@ the per-photo unit of work that ``analyze`` and ``batch`` share."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import shutil
@@ -178,6 +179,21 @@ def write_report(findings: Findings, evidence: Evidence, folder: Path, host: Plu
     return list(result.refused_urls)
 
 
+def _changed_since(photo: Path, sha256: str) -> str | None:
+    """Why the file on disk is no longer the hashed evidence, or None when it still is."""
+    digest = hashlib.sha256()
+    try:
+        with photo.open("rb") as fh:
+            for chunk in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(chunk)
+    except OSError as exc:
+        return f"the file could not be read again after the analysis: {exc.strerror or exc}"
+    if digest.hexdigest() != sha256:
+        return (f"the file changed during the analysis (its SHA-256 is now {digest.hexdigest()}): a plugin or another "
+                f"program wrote to it; these findings are of the bytes as first hashed")
+    return None
+
+
 def examine_photo(photo: Path, place: Callable[[Evidence, Findings], Placement], host: PluginHost, options: Options,
                   report: ReportSettings | None = None) -> Examined:
     """Take in ``photo``, run the detectors and write ``findings.json`` (and the report) into its folder.
@@ -206,6 +222,7 @@ def examine_photo(photo: Path, place: Callable[[Evidence, Findings], Placement],
     """
     evidence = load_evidence(photo, max_pixels=options.max_pixels)
     findings = analyze_evidence(evidence, host, options)
+    findings.evidence.changed_during_analysis = _changed_since(photo, evidence.info.sha256)
     placement = place(evidence, findings)
     folder = placement.folder
     if placement.action == "kept":

@@ -173,7 +173,7 @@ def process_photo(job: Job, settings: Settings) -> PhotoOutcome:
         return PhotoOutcome(error=error, seconds=seconds, worker_peak_mb=worker_mb, child_peak_mb=child_mb)
     findings = done.findings
     return PhotoOutcome(
-        error=None,
+        error=findings.evidence.changed_during_analysis,
         verdict=findings.verdict.label.value,
         detectors=tuple((d.name, d.status.value, d.score) for d in findings.detectors),
         seconds=seconds,

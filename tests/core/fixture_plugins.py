@@ -88,6 +88,16 @@ class Mutating(_Detector):
         return DetectorResult(Status.OK, "Wrote to the evidence.")
 
 
+class FileWriter(_Detector):
+    name = "file_writer"
+
+    @hookimpl
+    def forensics_analyze(self, detector, evidence, params):
+        with open(evidence.path, "ab") as fh:
+            fh.write(b"\0")
+        return DetectorResult(Status.OK, "Appended a byte to the evidence file.")
+
+
 class BadRegistration:
     @hookimpl
     def forensics_register_detectors(self):
@@ -119,5 +129,5 @@ class Metadata:
 
 
 good, reader, raising, hanging, garbage = Good(), Reader(), Raising(), Hanging(), Garbage()
-out_of_range, crashing, mutating = OutOfRange(), Crashing(), Mutating()
+out_of_range, crashing, mutating, file_writer = OutOfRange(), Crashing(), Mutating(), FileWriter()
 bad_registration, typo, wrong_args, raising_fusion, metadata = BadRegistration(), Typo(), WrongArgs(), RaisingFusion(), Metadata()

@@ -2,6 +2,7 @@
 
 import json
 from importlib.metadata import EntryPoint
+from pathlib import Path
 
 from click.testing import CliRunner
 from plugin_hosts import fixture_host
@@ -130,3 +131,16 @@ def test_plugins_command_lists_status_and_errors(monkeypatch):
     assert "forensics_analyze" in names["lens_distortion"]["hooks"]
     table = CliRunner().invoke(cli, ["plugins"])
     assert table.exit_code == 0 and "lens_distortion" in table.output
+
+
+def test_a_plugin_that_writes_to_the_evidence_file_is_caught_and_said_loudly(photo, tmp_path):
+    from forensics_core.analysis import Options
+    from forensics_core.output import Placement, examine_photo
+
+    copy = tmp_path / "copy.jpg"
+    copy.write_bytes(Path(photo).read_bytes())
+    done = examine_photo(copy, lambda ev, fi: Placement(tmp_path / "out"), fixture_host("file_writer"),
+                         Options(timeout_s=30))
+    note = done.findings.evidence.changed_during_analysis
+    assert note and "changed during the analysis" in note and "wrote to it" in note
+    assert json.loads(done.findings_path.read_text())["evidence"]["changed_during_analysis"] == note
