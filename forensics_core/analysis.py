@@ -14,6 +14,8 @@ import faulthandler
 import multiprocessing
 import os
 import platform
+import sys
+import tempfile
 import threading
 import time
 import traceback
@@ -126,10 +128,19 @@ def resolve_params(host: PluginHost, options: Options) -> dict[str, dict[str, An
     }
 
 
-def _child(call: Callable[[], Any], conn) -> None:
+OUTPUT_LIMIT = 4000
+
+
+def _child(call: Callable[[], Any], conn, sink: int) -> None:
     # A crash of the detector is reported in its finding; an inherited fault
     # handler would also dump the interpreter's state onto the user's terminal.
     faulthandler.disable()
+    # What the detector or its libraries print (Python or C) goes to the
+    # finding, not to the terminal the user reads one line per photo on.
+    os.dup2(sink, 1)
+    os.dup2(sink, 2)
+    sys.stdout = open(1, "w", encoding="utf-8", errors="replace", closefd=False)
+    sys.stderr = open(2, "w", encoding="utf-8", errors="replace", closefd=False)
     try:
         outcome = ("value", call())
     except BaseException as exc:
@@ -142,27 +153,38 @@ def _child(call: Callable[[], Any], conn) -> None:
         conn.close()
 
 
-def _run_forked(call: Callable[[], Any], timeout_s: float) -> tuple:
+def _run_forked(call: Callable[[], Any], timeout_s: float) -> tuple[tuple, str | None]:
+    """The child's outcome, and what it printed (None when nothing)."""
     ctx = multiprocessing.get_context("fork")
     receiver, sender = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(call, sender), daemon=True)
-    proc.start()
-    sender.close()
-    try:
-        if not receiver.poll(timeout_s):
-            proc.kill()
-            return ("error", f"timed out after {timeout_s:g} s", "")
+    sys.stdout.flush()
+    sys.stderr.flush()
+    with tempfile.TemporaryFile() as sink:
+        proc = ctx.Process(target=_child, args=(call, sender, sink.fileno()), daemon=True)
+        proc.start()
+        sender.close()
         try:
-            return receiver.recv()
-        except EOFError:
+            if not receiver.poll(timeout_s):
+                proc.kill()
+                outcome: tuple = ("error", f"timed out after {timeout_s:g} s", "")
+            else:
+                try:
+                    outcome = receiver.recv()
+                except EOFError:
+                    proc.join(5)
+                    outcome = ("error", f"detector process died (exit code {proc.exitcode})", "")
+        finally:
+            receiver.close()
             proc.join(5)
-            return ("error", f"detector process died (exit code {proc.exitcode})", "")
-    finally:
-        receiver.close()
-        proc.join(5)
-        if proc.is_alive():
-            proc.kill()
-            proc.join()
+            if proc.is_alive():
+                proc.kill()
+                proc.join()
+        size = os.fstat(sink.fileno()).st_size
+        sink.seek(0)
+        text = sink.read(OUTPUT_LIMIT).decode("utf-8", "replace")
+    if size > OUTPUT_LIMIT:
+        text += f"... ({size:,} bytes in all)"
+    return outcome, text or None
 
 
 def _run_threaded(call: Callable[[], Any], timeout_s: float) -> tuple:
@@ -218,17 +240,18 @@ def run_detector(
         return analyze_impl(detector=name, evidence=evidence, params=dict(params), prior=seen)
 
     started = time.perf_counter()
+    printed: str | None = None
     if analyze_impl is None:
         outcome: tuple = ("error", f"plugin {plugin!r} registers {name!r} but implements no forensics_analyze", "")
     elif options.isolation == "process" and "fork" in multiprocessing.get_all_start_methods():
-        outcome = _run_forked(call, options.timeout_s)
+        outcome, printed = _run_forked(call, options.timeout_s)
     else:
         outcome = _run_threaded(call, options.timeout_s)
     elapsed = round(time.perf_counter() - started, 3)
 
     def failed(reason: str, details: dict[str, Any] | None = None) -> DetectorFinding:
         return DetectorFinding(spec.name, spec.version, plugin, Status.ERROR, "The detector failed; see error.",
-                               None, None, None, details or {}, params, elapsed, error=reason)
+                               None, None, None, details or {}, params, elapsed, error=reason, output=printed)
 
     if outcome[0] == "error":
         return failed(outcome[1], {"traceback": outcome[2]} if outcome[2] else None)
@@ -237,7 +260,7 @@ def run_detector(
     except MalformedResult as exc:
         return failed(f"malformed result: {exc}")
     return DetectorFinding(spec.name, spec.version, plugin, result.status, result.summary, result.score,
-                           result.p_value, result.nfa, result.details, params, elapsed)
+                           result.p_value, result.nfa, result.details, params, elapsed, output=printed)
 
 
 def _extra_metadata(host: PluginHost, evidence: Evidence) -> dict[str, Any]:

@@ -123,7 +123,12 @@ class DetectorResult:
 
 @dataclass
 class DetectorFinding:
-    """One detector's entry in ``findings.json``: its result plus provenance."""
+    """One detector's entry in ``findings.json``: its result plus provenance.
+
+    ``output`` keeps what the detector's process printed (its stdout and
+    stderr, libraries' warnings included), cut at 4,000 characters, instead
+    of letting it reach the user's terminal.
+    """
 
     name: str
     version: str
@@ -138,6 +143,7 @@ class DetectorFinding:
     elapsed_s: float
     error: str | None = None
     log10_lr: float | None = None
+    output: str | None = None
 
 
 class Role(str, enum.Enum):

@@ -98,6 +98,21 @@ class FileWriter(_Detector):
         return DetectorResult(Status.OK, "Appended a byte to the evidence file.")
 
 
+class Chatty(_Detector):
+    name = "chatty"
+
+    @hookimpl
+    def forensics_analyze(self, detector, evidence, params):
+        import sys
+        import warnings
+
+        for i in range(200_000):
+            print(f"line {i}")
+        warnings.warn("a library complains")
+        sys.stderr.write("to stderr\n")
+        return DetectorResult(Status.OK, "Printed a lot.", score=0.1)
+
+
 class BadRegistration:
     @hookimpl
     def forensics_register_detectors(self):
@@ -129,5 +144,5 @@ class Metadata:
 
 
 good, reader, raising, hanging, garbage = Good(), Reader(), Raising(), Hanging(), Garbage()
-out_of_range, crashing, mutating, file_writer = OutOfRange(), Crashing(), Mutating(), FileWriter()
+out_of_range, crashing, mutating, file_writer, chatty = OutOfRange(), Crashing(), Mutating(), FileWriter(), Chatty()
 bad_registration, typo, wrong_args, raising_fusion, metadata = BadRegistration(), Typo(), WrongArgs(), RaisingFusion(), Metadata()

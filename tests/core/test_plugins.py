@@ -144,3 +144,11 @@ def test_a_plugin_that_writes_to_the_evidence_file_is_caught_and_said_loudly(pho
     note = done.findings.evidence.changed_during_analysis
     assert note and "changed during the analysis" in note and "wrote to it" in note
     assert json.loads(done.findings_path.read_text())["evidence"]["changed_during_analysis"] == note
+
+
+def test_what_a_detector_prints_is_kept_in_its_finding_not_on_our_terminal(photo, capfd):
+    finding = analyze(photo, host=fixture_host("chatty"), timeout=60).detectors[0]
+    out, err = capfd.readouterr()
+    assert "line 0" not in out and "a library complains" not in err
+    assert finding.status is Status.OK and finding.output.startswith("line 0\nline 1\n")
+    assert len(finding.output) < 4100 and "bytes in all)" in finding.output
