@@ -405,25 +405,30 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
     hashed_at = datetime.now(timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z")
     if not data:
         raise EvidenceError("empty file")
-    try:
-        img, others = _open_checked(data, max_pixels)
-    except EvidenceError:
-        raise
-    except UnidentifiedImageError:
-        raise EvidenceError("not an image (no known image format recognised)") from None
-    except (Image.DecompressionBombError, Image.DecompressionBombWarning):
-        raise EvidenceError(_too_many_pixels(max_pixels)) from None
-    except (OSError, SyntaxError, ValueError, EOFError, IndexError, struct.error) as exc:
-        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise EvidenceError(f"corrupt or truncated image: {reason}") from None
+    # Pillow warns about what it tolerates in a file (EXIF offsets out of
+    # range, truncated tags); those are observations about the evidence, kept
+    # in the decoder note, not lines on the user's terminal.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            img, others = _open_checked(data, max_pixels)
+        except EvidenceError:
+            raise
+        except UnidentifiedImageError:
+            raise EvidenceError("not an image (no known image format recognised)") from None
+        except (Image.DecompressionBombError, Image.DecompressionBombWarning):
+            raise EvidenceError(_too_many_pixels(max_pixels)) from None
+        except (OSError, SyntaxError, ValueError, EOFError, IndexError, struct.error) as exc:
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise EvidenceError(f"corrupt or truncated image: {reason}") from None
 
-    try:
-        exif = _read_exif(img)
-    except (SyntaxError, ValueError, TypeError, KeyError, IndexError, OSError, EOFError, struct.error,
-            ZeroDivisionError, RecursionError) as exc:
-        # Broken EXIF is an observation about the file, not a reason to stop.
-        reason = str(exc).splitlines()[0][:200] if str(exc) else type(exc).__name__
-        exif = ExifSummary(unreadable=f"EXIF unreadable: {_safe_text(reason)}")
+        try:
+            exif = _read_exif(img)
+        except (SyntaxError, ValueError, TypeError, KeyError, IndexError, OSError, EOFError, struct.error,
+                ZeroDivisionError, RecursionError) as exc:
+            # Broken EXIF is an observation about the file, not a reason to stop.
+            reason = str(exc).splitlines()[0][:200] if str(exc) else type(exc).__name__
+            exif = ExifSummary(unreadable=f"EXIF unreadable: {_safe_text(reason)}")
     metadata, reader = _metadata(data)
     quant = getattr(img, "quantization", None) or {}
     info = EvidenceInfo(
@@ -447,10 +452,16 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
         metadata=metadata,
         metadata_reader=reader,
     )
-    try:
-        pixels = _pixel_array(img)
-    finally:
-        img.close()
+    with warnings.catch_warnings(record=True) as decoding:
+        warnings.simplefilter("always")
+        try:
+            pixels = _pixel_array(img)
+        finally:
+            img.close()
+    tolerated = sorted({_safe_text(str(w.message)) for w in caught + decoding})[:5]
+    if tolerated:
+        note = "The decoder tolerated: " + "; ".join(tolerated) + "."
+        info.decoder_note = f"{info.decoder_note} {note}" if info.decoder_note else note
     if pixels.dtype.kind == "f" and not np.isfinite(pixels).all():
         bad = int(pixels.size - np.isfinite(pixels).sum())
         note = f"{bad:,} sample(s) of the stored grid are not finite numbers (NaN or infinite); the detectors read them as 0."

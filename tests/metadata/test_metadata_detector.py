@@ -260,3 +260,17 @@ def test_no_section_without_details():
     failed = DetectorFinding(NAME, "1.0.0", "metadata", Status.ERROR, "failed", None, None, None, {}, {}, 0.0,
                              error="x")
     assert plugin.forensics_report_section(failed, None) is None
+
+
+def test_what_pillow_tolerates_in_the_exif_is_noted_not_printed(tmp_path):
+    import subprocess
+    import sys
+
+    block = with_thumbnail(exif_bytes(**CAMERA), camera_thumbnail(photo()), ifd1_offset=10**6)
+    path = tmp_path / "lie.jpg"
+    path.write_bytes(jpeg(photo(), block))
+    done = subprocess.run([sys.executable, "-m", "forensics_core", "analyze", str(path), "--out", str(tmp_path / "o"),
+                           "--format", "json", "--detectors", "metadata"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0 and done.stderr.strip() == "", done.stderr
+    note = json.loads((tmp_path / "o" / "lie" / "findings.json").read_text())["evidence"]["decoder_note"]
+    assert note.startswith("The decoder tolerated: ") and "Corrupt EXIF data" in note
