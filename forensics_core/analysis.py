@@ -10,16 +10,10 @@ the runaway thread cannot be stopped.
 
 from __future__ import annotations
 
-import faulthandler
-import multiprocessing
 import os
 import platform
-import sys
-import tempfile
-import threading
 import time
-import traceback
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from importlib.metadata import PackageNotFoundError, version
@@ -40,6 +34,7 @@ from .findings import (
     check_result,
     to_jsonable,
 )
+from .containment import can_fork, run_forked, run_threaded
 from .evaluation import calibration_file, decide_by_lr, evaluate
 from .fusion import POLICY as DEFAULT_FUSION
 from .plugins import PluginHost, one_line
@@ -128,82 +123,6 @@ def resolve_params(host: PluginHost, options: Options) -> dict[str, dict[str, An
     }
 
 
-OUTPUT_LIMIT = 4000
-
-
-def _child(call: Callable[[], Any], conn, sink: int) -> None:
-    # A crash of the detector is reported in its finding; an inherited fault
-    # handler would also dump the interpreter's state onto the user's terminal.
-    faulthandler.disable()
-    # What the detector or its libraries print (Python or C) goes to the
-    # finding, not to the terminal the user reads one line per photo on.
-    os.dup2(sink, 1)
-    os.dup2(sink, 2)
-    sys.stdout = open(1, "w", encoding="utf-8", errors="replace", closefd=False)
-    sys.stderr = open(2, "w", encoding="utf-8", errors="replace", closefd=False)
-    try:
-        outcome = ("value", call())
-    except BaseException as exc:
-        outcome = ("error", one_line(exc), traceback.format_exc())
-    try:
-        conn.send(outcome)
-    except Exception as exc:
-        conn.send(("error", f"result could not be passed back: {one_line(exc)}", ""))
-    finally:
-        conn.close()
-
-
-def _run_forked(call: Callable[[], Any], timeout_s: float) -> tuple[tuple, str | None]:
-    """The child's outcome, and what it printed (None when nothing)."""
-    ctx = multiprocessing.get_context("fork")
-    receiver, sender = ctx.Pipe(duplex=False)
-    sys.stdout.flush()
-    sys.stderr.flush()
-    with tempfile.TemporaryFile() as sink:
-        proc = ctx.Process(target=_child, args=(call, sender, sink.fileno()), daemon=True)
-        proc.start()
-        sender.close()
-        try:
-            if not receiver.poll(timeout_s):
-                proc.kill()
-                outcome: tuple = ("error", f"timed out after {timeout_s:g} s", "")
-            else:
-                try:
-                    outcome = receiver.recv()
-                except EOFError:
-                    proc.join(5)
-                    outcome = ("error", f"detector process died (exit code {proc.exitcode})", "")
-        finally:
-            receiver.close()
-            proc.join(5)
-            if proc.is_alive():
-                proc.kill()
-                proc.join()
-        size = os.fstat(sink.fileno()).st_size
-        sink.seek(0)
-        text = sink.read(OUTPUT_LIMIT).decode("utf-8", "replace")
-    if size > OUTPUT_LIMIT:
-        text += f"... ({size:,} bytes in all)"
-    return outcome, text or None
-
-
-def _run_threaded(call: Callable[[], Any], timeout_s: float) -> tuple:
-    box: list[tuple] = []
-
-    def target() -> None:
-        try:
-            box.append(("value", call()))
-        except BaseException as exc:
-            box.append(("error", one_line(exc), traceback.format_exc()))
-
-    worker = threading.Thread(target=target, daemon=True, name="forensics-detector")
-    worker.start()
-    worker.join(timeout_s)
-    if worker.is_alive():
-        return ("error", f"timed out after {timeout_s:g} s (still running in the background)", "")
-    return box[0]
-
-
 def run_detector(
     host: PluginHost,
     name: str,
@@ -243,10 +162,10 @@ def run_detector(
     printed: str | None = None
     if analyze_impl is None:
         outcome: tuple = ("error", f"plugin {plugin!r} registers {name!r} but implements no forensics_analyze", "")
-    elif options.isolation == "process" and "fork" in multiprocessing.get_all_start_methods():
-        outcome, printed = _run_forked(call, options.timeout_s)
+    elif options.isolation == "process" and can_fork():
+        outcome, printed = run_forked(call, options.timeout_s)
     else:
-        outcome = _run_threaded(call, options.timeout_s)
+        outcome = run_threaded(call, options.timeout_s)
     elapsed = round(time.perf_counter() - started, 3)
 
     def failed(reason: str, details: dict[str, Any] | None = None) -> DetectorFinding:
@@ -263,9 +182,9 @@ def run_detector(
                            result.p_value, result.nfa, result.details, params, elapsed, output=printed)
 
 
-def _extra_metadata(host: PluginHost, evidence: Evidence) -> dict[str, Any]:
+def _extra_metadata(host: PluginHost, evidence: Evidence, contained_s: float | None) -> dict[str, Any]:
     extra: dict[str, Any] = {}
-    for outcome in host.call_each("forensics_extract_metadata", evidence=evidence):
+    for outcome in host.call_each("forensics_extract_metadata", contained_s=contained_s, evidence=evidence):
         if outcome.error is not None:
             extra[outcome.plugin] = {"error": one_line(outcome.error)}
         elif outcome.value is not None:
@@ -317,7 +236,8 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
         raise ValueError(f"isolation must be one of {', '.join(ISOLATIONS)}")
     params = resolve_params(host, options)
     selected = list(options.detectors) if options.detectors is not None else sorted(host.detectors)
-    evidence.info.extra_metadata = _extra_metadata(host, evidence)
+    contained = options.timeout_s if options.isolation == "process" else None
+    evidence.info.extra_metadata = _extra_metadata(host, evidence, contained)
     done: dict[str, DetectorFinding] = {}
     for name in run_order(host, selected):
         done[name] = run_detector(host, name, evidence, params.get(name, {}), options, prior=done)

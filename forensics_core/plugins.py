@@ -19,18 +19,13 @@ from typing import Any
 import pluggy
 
 from . import ENTRY_POINT_GROUP, hookspecs
+from .containment import PluginFault, can_fork, one_line, run_forked
 from .findings import DetectorSpec, PluginRecord
 
 ALLOW_ENV = "FORENSICS_PLUGINS"
 DENY_ENV = "FORENSICS_DISABLE_PLUGINS"
 
 _DETECTOR_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
-
-
-def one_line(exc: BaseException) -> str:
-    """``Type: message`` on one line, for findings and the terminal."""
-    text = " ".join(str(exc).split())
-    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
 @dataclass(frozen=True)
@@ -167,13 +162,17 @@ class PluginHost:
     def _hook_names(self, plugin: object) -> list[str]:
         return sorted(h.name for h in self.pm.get_hookcallers(plugin) or [])
 
-    def call_each(self, hook_name: str, plugins: Iterable[str] | None = None, **kwargs: Any) -> Iterator[HookOutcome]:
+    def call_each(self, hook_name: str, plugins: Iterable[str] | None = None, *, contained_s: float | None = None,
+                  **kwargs: Any) -> Iterator[HookOutcome]:
         """Call each plugin's implementation of ``hook_name`` on its own.
 
         Implementations are visited in pluggy's calling order (last registered
         first). An implementation that raises yields a :class:`HookOutcome`
         with the exception; the others still run. Hook wrappers are not called:
-        every forensics hook is a plain call.
+        every forensics hook is a plain call. With ``contained_s``, each call
+        runs in a forked child (where the platform can fork) stopped after that
+        many seconds, so a hang, an ``os._exit`` or a crash costs only that
+        plugin's outcome; the value comes back pickled.
         """
         wanted = set(plugins) if plugins is not None else None
         hook = getattr(self.pm.hook, hook_name)
@@ -182,8 +181,16 @@ class PluginHost:
                 continue
             if wanted is not None and impl.plugin_name not in wanted:
                 continue
+            args = [kwargs[arg] for arg in impl.argnames]
+            if contained_s is not None and can_fork():
+                outcome, _ = run_forked(lambda: impl.function(*args), contained_s)
+                if outcome[0] == "error":
+                    yield HookOutcome(impl.plugin_name, error=PluginFault(outcome[1]))
+                else:
+                    yield HookOutcome(impl.plugin_name, value=outcome[1])
+                continue
             try:
-                value = impl.function(*(kwargs[arg] for arg in impl.argnames))
+                value = impl.function(*args)
             except Exception as exc:
                 yield HookOutcome(impl.plugin_name, error=exc)
             else:

@@ -117,14 +117,21 @@ def _failed(finding: DetectorFinding, reason: str) -> DetectorSection:
     return DetectorSection(finding, f"{finding.name}: report section failed", failure=reason)
 
 
-def section_for(host: PluginHost | None, finding: DetectorFinding, evidence: Evidence) -> DetectorSection:
+SECTION_TIMEOUT_S = 300.0
+
+
+def section_for(host: PluginHost | None, finding: DetectorFinding, evidence: Evidence,
+                timeout_s: float | None = None) -> DetectorSection:
     """The section of one finding, from the plugin that registered its detector.
 
-    Never raises: whatever the plugin does wrong becomes the section's ``failure``.
+    Never raises: whatever the plugin does wrong (raising, hanging past
+    ``timeout_s``, default :data:`SECTION_TIMEOUT_S`, ending its process)
+    becomes the section's ``failure``; the hook runs in a child process, as
+    detectors do.
     """
     if host is None or finding.plugin not in host.records:
         return DetectorSection(finding, finding.name)
-    for outcome in host.call_each("forensics_report_section", plugins=[finding.plugin],
+    for outcome in host.call_each("forensics_report_section", plugins=[finding.plugin], contained_s=timeout_s or SECTION_TIMEOUT_S,
                                   finding=finding, evidence=evidence):
         if outcome.error is not None:
             return _failed(finding, f"its report hook raised {one_line(outcome.error)}")

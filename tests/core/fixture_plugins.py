@@ -137,6 +137,12 @@ class RaisingFusion:
         raise RuntimeError("fusion broke")
 
 
+class MetadataHanging:
+    @hookimpl
+    def forensics_extract_metadata(self, evidence):
+        time.sleep(3600)
+
+
 class Metadata:
     @hookimpl
     def forensics_extract_metadata(self, evidence):
@@ -144,5 +150,6 @@ class Metadata:
 
 
 good, reader, raising, hanging, garbage = Good(), Reader(), Raising(), Hanging(), Garbage()
+metadata_hanging = MetadataHanging()
 out_of_range, crashing, mutating, file_writer, chatty = OutOfRange(), Crashing(), Mutating(), FileWriter(), Chatty()
 bad_registration, typo, wrong_args, raising_fusion, metadata = BadRegistration(), Typo(), WrongArgs(), RaisingFusion(), Metadata()

@@ -152,3 +152,9 @@ def test_what_a_detector_prints_is_kept_in_its_finding_not_on_our_terminal(photo
     assert "line 0" not in out and "a library complains" not in err
     assert finding.status is Status.OK and finding.output.startswith("line 0\nline 1\n")
     assert len(finding.output) < 4100 and "bytes in all)" in finding.output
+
+
+def test_a_metadata_hook_that_hangs_is_stopped_at_the_time_limit(photo):
+    findings = analyze(photo, host=fixture_host("metadata_hanging", "good"), timeout=3)
+    assert "timed out after 3 s" in findings.evidence.extra_metadata["metadata_hanging"]["error"]
+    assert findings.detectors[0].status is Status.OK

@@ -59,6 +59,26 @@ class SectionRaising(_Detector):
         raise RuntimeError("the section hook broke")
 
 
+class SectionHanging(_Detector):
+    name = "section_hanging"
+
+    @hookimpl
+    def forensics_report_section(self, finding, evidence):
+        import time
+
+        time.sleep(3600)
+
+
+class SectionExiting(_Detector):
+    name = "section_exiting"
+
+    @hookimpl
+    def forensics_report_section(self, finding, evidence):
+        import os
+
+        os._exit(0)
+
+
 class SectionWrongType(_Detector):
     name = "section_wrong_type"
 
@@ -98,3 +118,4 @@ class NoSection(_Detector):
 
 sectioned, section_raising, section_wrong_type = Sectioned(), SectionRaising(), SectionWrongType()
 section_escapes, section_fetches, no_section = SectionEscapes(), SectionFetches(), NoSection()
+section_hanging, section_exiting = SectionHanging(), SectionExiting()

@@ -190,6 +190,15 @@ def test_a_failing_section_is_reported_and_the_report_still_renders(tmp_path, pl
     assert pdf.startswith(b"%PDF")
 
 
+@pytest.mark.parametrize("plugin, reason", [("section_hanging", "timed out after 3 s"),
+                                            ("section_exiting", "process died (exit code 0)")])
+def test_a_section_hook_that_hangs_or_ends_its_process_costs_only_its_section(tmp_path, monkeypatch, plugin, reason):
+    monkeypatch.setattr("forensics_core.report.plugin_sections.SECTION_TIMEOUT_S", 3.0)
+    report = render(hostile_jpeg(tmp_path / "p.jpg"), plugin, "sectioned")
+    assert f"{plugin}: report section failed" in report.html and reason in report.html
+    assert "Sectioned fixture detector" in report.html
+
+
 @pytest.mark.parametrize("paper, size", [("a4", "595.276 x 841.89"), ("letter", "612 x 792")])
 def test_paper_size(tmp_path, paper, size):
     report = render(hostile_jpeg(tmp_path / "p.jpg"), paper=paper)
