@@ -76,6 +76,21 @@ def test_a_heif_photo_gets_a_signed_report_that_verifies(chessboard, tmp_path, v
     assert verified.returncode == 0, verified.stdout + verified.stderr
 
 
+@pytest.mark.parametrize("fmt, suffix", [("WEBP", "webp"), ("AVIF", "avif")])
+def test_webp_and_avif_photos_get_a_signed_report_that_verifies(chessboard, tmp_path, validate, fmt, suffix):
+    path = tmp_path / f"shared.{suffix}"
+    chessboard.save(path, fmt, quality=85)
+    out = run("analyze", path, "--out", tmp_path / "out", "--detectors", "metadata,dq,provenance")
+    assert out.returncode == 0, out.stderr
+    bundle = tmp_path / "out" / "shared"
+    findings = validate(json.loads((bundle / "findings.json").read_text()))
+    assert findings["evidence"]["format"] == fmt
+    assert {d["name"]: d["status"] for d in findings["detectors"]}["dq"] == "skipped"
+    assert (bundle / "report.pdf").read_bytes().startswith(b"%PDF")
+    verified = run("verify", bundle, "--evidence", path)
+    assert verified.returncode == 0, verified.stdout + verified.stderr
+
+
 @pytest.fixture
 def small_pillow_limit():
     """Pillow's own bomb limit far below the photo's size, as a 100 MP photo meets the default 89 MP."""
