@@ -12,6 +12,8 @@ import io
 import json
 import os
 import struct
+import sys
+import tempfile
 import threading
 import warnings
 from contextlib import contextmanager
@@ -52,6 +54,30 @@ class EvidenceError(Exception):
 # Pillow's bomb limit is a module global: every decode of evidence sets it
 # under this lock, so threads (batch, Dask) never see each other's limit.
 _LIMIT_LOCK = threading.RLock()
+_STDERR_LOCK = threading.Lock()
+
+
+@contextmanager
+def _c_messages(lines: list[str]):
+    """Collect what C decoders (libtiff, libjpeg) print on file descriptor 2 while the block runs.
+
+    They write straight to the process's stderr, past Python; what they say
+    about the evidence belongs in its decoder note, not between the one-line
+    results on the user's terminal. The lock keeps two threads from swapping
+    the descriptor at once.
+    """
+    with _STDERR_LOCK, tempfile.TemporaryFile() as sink:
+        sys.stderr.flush()
+        saved = os.dup(2)
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            sink.seek(0)
+            lines.extend(line.strip() for line in sink.read(4000).decode("utf-8", "replace").splitlines()
+                         if line.strip())
 
 
 @contextmanager
@@ -408,7 +434,8 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
     # Pillow warns about what it tolerates in a file (EXIF offsets out of
     # range, truncated tags); those are observations about the evidence, kept
     # in the decoder note, not lines on the user's terminal.
-    with warnings.catch_warnings(record=True) as caught:
+    printed: list[str] = []
+    with warnings.catch_warnings(record=True) as caught, _c_messages(printed):
         warnings.simplefilter("always")
         try:
             img, others = _open_checked(data, max_pixels)
@@ -452,13 +479,13 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
         metadata=metadata,
         metadata_reader=reader,
     )
-    with warnings.catch_warnings(record=True) as decoding:
+    with warnings.catch_warnings(record=True) as decoding, _c_messages(printed):
         warnings.simplefilter("always")
         try:
             pixels = _pixel_array(img)
         finally:
             img.close()
-    tolerated = sorted({_safe_text(str(w.message)) for w in caught + decoding})[:5]
+    tolerated = sorted({_safe_text(str(w.message)) for w in caught + decoding} | {_safe_text(t) for t in printed})[:5]
     if tolerated:
         note = "The decoder tolerated: " + "; ".join(tolerated) + "."
         info.decoder_note = f"{info.decoder_note} {note}" if info.decoder_note else note
