@@ -2,9 +2,10 @@
 ``batch_fixtures`` distribution beside this file (put this folder on PYTHONPATH).
 
 ``steady``: a detector that takes ``seconds`` and reports the mean luma.
-``killer``: kills the process that analyses a photo whose name contains
-``$BATCH_TEST_KILL`` (its metadata hook runs in the worker itself, not in a
-detector child), after noting the attempt in ``$BATCH_TEST_LOG``.
+``killer``: kills the worker that analyses a photo whose name contains
+``$BATCH_TEST_KILL``, after noting the attempt in ``$BATCH_TEST_LOG``. Its
+metadata hook runs contained, in a child the worker forks, so the worker is
+that child's parent.
 """
 
 import os
@@ -39,7 +40,7 @@ class Killer:
             with open(log, "a") as fh:
                 fh.write(f"{evidence.info.name} {os.getpid()}\n")
         if target and target in evidence.info.name:
-            os.kill(os.getpid(), signal.SIGKILL)
+            os.kill(os.getppid(), signal.SIGKILL)
         return None
 
 
