@@ -55,6 +55,9 @@ class EvidenceError(Exception):
 # under this lock, so threads (batch, Dask) never see each other's limit.
 _LIMIT_LOCK = threading.RLock()
 _STDERR_LOCK = threading.Lock()
+# What Pillow raises on a malformed file, beyond OSError: TIFF headers without
+# dimensions give TypeError, bad tag tables KeyError or IndexError.
+_DECODE_ERRORS = (OSError, SyntaxError, ValueError, TypeError, KeyError, EOFError, IndexError, struct.error)
 
 
 @contextmanager
@@ -352,12 +355,22 @@ def _other_images(img: Image.Image, max_pixels: int) -> list[ContainedImage]:
     limit are listed, never decoded.
     """
     out: list[ContainedImage] = []
-    n = int(getattr(img, "n_frames", 1) or 1)
+    kind = {"TIFF": "page", "HEIF": "HEIF image", "AVIF": "AVIF image"}.get(str(img.format), "frame")
+    try:
+        n = int(getattr(img, "n_frames", 1) or 1)
+    except _DECODE_ERRORS:
+        # Counting pages reads every page's header; a broken later page must
+        # not cost the first one.
+        img.seek(0)
+        return [ContainedImage(1, f"unreadable {kind}(s) after the first")]
     primary = 0
     if n > 1:
-        kind = {"TIFF": "page", "HEIF": "HEIF image", "AVIF": "AVIF image"}.get(str(img.format), "frame")
         for i in range(n):
-            img.seek(i)
+            try:
+                img.seek(i)
+            except _DECODE_ERRORS:
+                out.append(ContainedImage(i, f"unreadable {kind}"))
+                continue
             if img.format == "HEIF" and img.info.get("primary"):
                 primary = i
             out.append(ContainedImage(i, _mpo_kind(img, i) if img.format == "MPO" else kind, *img.size))
@@ -445,7 +458,7 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
             raise EvidenceError("not an image (no known image format recognised)") from None
         except (Image.DecompressionBombError, Image.DecompressionBombWarning):
             raise EvidenceError(_too_many_pixels(max_pixels)) from None
-        except (OSError, SyntaxError, ValueError, EOFError, IndexError, struct.error) as exc:
+        except _DECODE_ERRORS as exc:
             reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise EvidenceError(f"corrupt or truncated image: {reason}") from None
 

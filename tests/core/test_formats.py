@@ -2,6 +2,7 @@
 declare the formats they apply to, and the intake's pixel limit on every decoder. All files are made here from
 the suite's own chessboard photo (tests/data/calibration)."""
 
+import io
 import json
 
 import numpy as np
@@ -106,3 +107,16 @@ def test_a_detector_decoding_again_is_held_to_the_intake_limit_not_pillows(photo
     with ev.open_image(("JPEG",)) as img:
         assert img.size == (640, 480)
     assert Image.MAX_IMAGE_PIXELS == 10_000
+
+
+def test_a_tiff_whose_second_page_is_broken_is_analysed_on_its_first(chessboard, tmp_path):
+    buf = io.BytesIO()
+    chessboard.save(buf, "TIFF", save_all=True, append_images=[chessboard.resize((320, 240))])
+    data = bytearray(buf.getvalue())
+    second = data.rfind(b"\x01\x01\x04\x00")  # the second page's ImageLength (0x0101, LONG, little-endian)
+    data[second:second + 2] = b"\x00\x00"
+    path = tmp_path / "pages.tif"
+    path.write_bytes(bytes(data))
+    ev = load_evidence(path)
+    assert ev.pixels.shape[:2] == (480, 640)
+    assert ev.info.other_images and ev.info.other_images[0].kind.startswith("unreadable page")
