@@ -33,7 +33,6 @@ from .signing import (
     PASSWORD_ENV,
     ExaminerKey,
     SigningError,
-    config_dir,
     create_self_signed,
     default_key,
     default_key_path,
@@ -41,7 +40,10 @@ from .signing import (
     load_key,
     write_key_files,
 )
+from .home import config_dir
 from .text import visible
+from . import trust as trust_store
+from .trust import TrustError
 from .calibration import CalibrationError
 from .calibration import load as load_calibration
 from .calibration.command import calibrate_command
@@ -140,7 +142,8 @@ def _signing_key(key_path: Path | None, examiner: str | None, organisation: str 
         raise click.BadParameter(str(exc), param_hint="--key") from None
     if key.created_now:
         click.echo(f"forensics: made a self-signed examiner key for trial use: {key.source} "
-                   f"(SHA-256 {key.fingerprint}); see `forensics keys create` and --key")
+                   f"(SHA-256 {key.fingerprint}), trusted by `forensics verify` on this account; see "
+                   "`forensics keys create` and --key")
     return key
 
 
@@ -416,7 +419,8 @@ def keys_create(name, organisation, out_dir, key_type):
     try:
         p12, cert = create_self_signed(name, organisation, key_type, password or None)
         p12_path, pem_path = write_key_files(folder, p12, cert)
-    except SigningError as exc:
+        trusted = trust_store.trust_certificate(cert)
+    except (SigningError, TrustError) as exc:
         _fail_line("keys create", str(exc))
         sys.exit(1)
     except OSError as exc:
@@ -426,20 +430,77 @@ def keys_create(name, organisation, out_dir, key_type):
     click.echo(f"certificate: {pem_path}")
     click.echo(f"subject:     {cert.subject.rfc4514_string()} (self-signed, {key_type})")
     click.echo(f"SHA-256:     {fingerprint(cert)}")
+    click.echo(f"trusted:     yes, in {trusted.path.parent} (your own key; `forensics verify` accepts its signatures)")
+
+
+@keys_group.group("trust")
+def trust_group() -> None:
+    """The certificates whose signatures `verify` accepts (the trust store).
+
+    A valid signature proves a bundle unchanged since signing, not who signed
+    it: `verify` passes a bundle only when its signer chains to a certificate
+    held here or given with --trust. Your own key is added when it is made.
+    """
+
+
+def _echo_trusted(entry) -> None:
+    kind = "self-signed" if entry.self_signed else "issued"
+    click.echo(f"{entry.fingerprint}  {visible(entry.subject)}  ({kind}, valid to {entry.not_after})")
+
+
+@trust_group.command("add")
+@click.argument("cert", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+def trust_add(cert):
+    """Trust the certificate(s) in CERT (PEM or DER): a colleague's, or your organisation's CA."""
+    try:
+        added = trust_store.add(cert)
+    except TrustError as exc:
+        _fail_line("keys trust add", str(exc))
+        sys.exit(1)
+    for entry in added:
+        click.echo("trusted: ", nl=False)
+        _echo_trusted(entry)
+
+
+@trust_group.command("list")
+def trust_list():
+    """List the trusted certificates: SHA-256 fingerprint, subject, validity."""
+    entries = trust_store.trusted()
+    if not entries:
+        click.echo(f"the trust store {trust_store.store_dir()} is empty")
+    for entry in entries:
+        _echo_trusted(entry)
+
+
+@trust_group.command("remove")
+@click.argument("which")
+def trust_remove(which):
+    """Stop trusting a certificate, named by its file or its SHA-256 fingerprint (8 hex digits at least)."""
+    try:
+        removed = trust_store.remove(which)
+    except TrustError as exc:
+        _fail_line("keys trust remove", str(exc))
+        sys.exit(1)
+    for entry in removed:
+        click.echo("removed: ", nl=False)
+        _echo_trusted(entry)
 
 
 @cli.command("verify")
 @click.argument("folder", type=click.Path(exists=True, file_okay=False, path_type=Path))
 @click.option("--evidence", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="The evidence photo; checked against the hashes the manifest records.")
-@click.option("--trust", type=click.Path(exists=True, dir_okay=False, path_type=Path),
-              help="Certificate (PEM or DER) the signatures must chain to. Without it the signer's own "
-                   "certificate is the anchor: integrity is checked, identity is not.")
+@click.option("--trust", type=click.Path(exists=True, dir_okay=False, path_type=Path), multiple=True,
+              help="Also trust this certificate (PEM or DER) for this run, besides the trust store's "
+                   "(`forensics keys trust`). Repeatable.")
 @click.option("--verbose", is_flag=True, help="Also print the signature libraries' own log messages.")
 def verify_command(folder, evidence, trust, verbose):
-    """Check a report folder: both signatures, every file's hash, and the evidence.
+    """Check a report folder: both signatures, every file's hash, the signer's trust, and the evidence.
 
-    Prints one line per failed check on stderr and exits 1 if any failed.
+    Exits 0 only when every check passes, the signer included: valid
+    signatures by a certificate that does not chain to a trusted one (the
+    trust store, or --trust) fail, since anyone can sign in any name. Prints
+    one line per failed check on stderr and exits 1 if any failed.
     """
     from .verify import verify_bundle
 

@@ -59,6 +59,11 @@ class Manifest:
     signer : dict
         Subject, SHA-256 fingerprint and self-signed flag of the signing certificate.
     files : list of FileEntry
+    outputs : list of str or None
+        The documents the run was asked to produce (``findings.json``, the
+        report's HTML and PDF, ``signer.pem``); ``verify`` fails a bundle
+        whose manifest does not list one of them. None in manifests written
+        before this field existed.
     """
 
     tool: Tool
@@ -68,6 +73,7 @@ class Manifest:
     evidence: dict[str, Any]
     signer: dict[str, Any]
     files: list[FileEntry]
+    outputs: list[str] | None = None
 
     def to_bytes(self) -> bytes:
         doc = {"manifest_version": MANIFEST_VERSION, **asdict(self)}
@@ -97,6 +103,7 @@ class Manifest:
                 evidence=dict(doc["evidence"]),
                 signer=dict(doc["signer"]),
                 files=[FileEntry(str(f["name"]), int(f["size"]), str(f["sha256"])) for f in doc["files"]],
+                outputs=None if doc.get("outputs") is None else [str(n) for n in doc["outputs"]],
             )
         except (KeyError, TypeError) as exc:
             raise ValueError(f"manifest is missing or mangles a field: {exc}") from None

@@ -22,14 +22,16 @@ from io import BytesIO
 from pathlib import Path
 
 from cryptography import x509
-from cryptography.exceptions import InvalidSignature
 from cryptography.hazmat.primitives import hashes, serialization
 from cryptography.hazmat.primitives.asymmetric import ec, rsa
 from cryptography.hazmat.primitives.serialization import pkcs12
 from cryptography.x509.oid import NameOID
 
+from . import trust
+from .certificates import fingerprint, is_self_signed
+from .home import config_dir
+
 PASSWORD_ENV = "FORENSICS_KEY_PASSWORD"
-HOME_ENV = "FORENSICS_HOME"
 KEY_TYPES = ("ecdsa-p256", "rsa-3072")
 DEFAULT_KEY_NAME = "examiner"
 _VALIDITY_DAYS = 730
@@ -38,30 +40,6 @@ _SIGNATURE_FIELD = "ExaminerCertification"
 
 class SigningError(Exception):
     """The key cannot be made, loaded or used; the message is one line for the user."""
-
-
-def config_dir() -> Path:
-    """Where per-user keys live: ``$FORENSICS_HOME``, ``$XDG_CONFIG_HOME/forensics`` or ``~/.config/forensics``."""
-    if os.environ.get(HOME_ENV):
-        return Path(os.environ[HOME_ENV])
-    base = os.environ.get("XDG_CONFIG_HOME") or str(Path.home() / ".config")
-    return Path(base) / "forensics"
-
-
-def fingerprint(cert: x509.Certificate) -> str:
-    """SHA-256 fingerprint of the DER certificate, colon-separated upper-case hex (as openssl prints it)."""
-    digest = cert.fingerprint(hashes.SHA256()).hex().upper()
-    return ":".join(digest[i : i + 2] for i in range(0, len(digest), 2))
-
-
-def is_self_signed(cert: x509.Certificate) -> bool:
-    if cert.issuer != cert.subject:
-        return False
-    try:
-        cert.verify_directly_issued_by(cert)
-    except (ValueError, TypeError, InvalidSignature):
-        return False
-    return True
 
 
 @dataclass(frozen=True)
@@ -206,14 +184,19 @@ def default_key_path() -> Path:
 
 def default_key(examiner: str | None = None, organisation: str | None = None,
                 password: bytes | None = None) -> ExaminerKey:
-    """The per-user key, made (self-signed, no password, mode 0600) on first use.
+    """The per-user key, made (self-signed, no password, mode 0600) on first use, and trusted.
 
     ``password`` opens an existing per-user key that ``forensics keys create``
-    protected with one.
+    protected with one. The key is put into the trust store when it is made,
+    and once more if the store does not exist yet (a key made before trust
+    stores existed); a key the examiner later removed from the store stays out.
     """
     path = default_key_path()
     if path.exists():
-        return load_key(path, password)
+        key = load_key(path, password)
+        if not trust.store_dir().exists():
+            _trust(key.cert)
+        return key
     # A login name ("root") is not an examiner's identity: a key made without
     # one says so, and reports signed with it say no examiner is named.
     name = examiner or UNNAMED_EXAMINER
@@ -222,8 +205,16 @@ def default_key(examiner: str | None = None, organisation: str | None = None,
         write_key_files(path.parent, p12, cert)
     except OSError as exc:
         raise SigningError(f"cannot store a new per-user key in {path.parent}: {exc.strerror or exc}") from None
+    _trust(cert)
     key = load_key(path, None)
     return ExaminerKey(key.cert, key.pkcs12_data, None, key.source, created_now=True)
+
+
+def _trust(cert: x509.Certificate) -> None:
+    try:
+        trust.trust_certificate(cert)
+    except trust.TrustError as exc:
+        raise SigningError(str(exc)) from None
 
 
 def sign_pdf(pdf: bytes, key: ExaminerKey, *, reason: str, location: str | None = None,

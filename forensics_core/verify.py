@@ -9,19 +9,26 @@ A bundle passes only when all of these hold:
   ``bottom_line`` is true, DocMDP is respected and the signature covers the
   ENTIRE file (bytes appended after ``%%EOF`` fail);
 * the PDF and the manifest are signed by the certificate the manifest names;
+* every document the manifest records as produced (``outputs``) is listed,
+  and ``findings.json`` is about the evidence the manifest names;
+* the signer chains to a trusted certificate: one of the trust store
+  (:mod:`forensics_core.trust`) or one given with ``--trust`` for this run;
 * the evidence, when given, has the SHA-256 and SHA-512 the manifest records.
 
-Trust. With ``--trust CERT`` both signatures must chain to that certificate.
-Without it, the signer's own certificate (carried in the signature) is taken
-as the anchor: that proves the files are unchanged since signing, not who
-signed them, and the result says so.
+Integrity and trust are checked apart. The signatures are first validated
+against the signer's own certificate, which proves the files unchanged since
+signing; a good signature by a signer nobody trusts then fails with
+"signatures valid but signer not trusted", since anyone can make a key in
+any name and re-sign a forged bundle (gpg and cosign draw the same line).
 """
 
 from __future__ import annotations
 
 import asyncio
 import hashlib
+import json
 import stat
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from io import BytesIO
 from pathlib import Path
@@ -30,6 +37,8 @@ from asn1crypto import cms
 from asn1crypto import x509 as asn1_x509
 
 from .manifest import MANIFEST_NAME, PDF_NAME, SIGNATURE_NAME, Manifest, sha256_file
+from .output import FINDINGS_NAME
+from .trust import trusted
 
 
 @dataclass(frozen=True)
@@ -83,6 +92,16 @@ def load_trust(path: Path) -> list[asn1_x509.Certificate]:
     return certs
 
 
+def _anchors(extra: Sequence[Path]) -> list[tuple[asn1_x509.Certificate, str]]:
+    """The trust anchors of this run, each with where it came from."""
+    anchors = []
+    for entry in trusted():
+        anchors.extend((cert, "trust store") for cert in load_trust(entry.path))
+    for path in extra:
+        anchors.extend((cert, "--trust") for cert in load_trust(path))
+    return anchors
+
+
 def _context(roots: list[asn1_x509.Certificate]):
     from pyhanko_certvalidator import ValidationContext
 
@@ -90,9 +109,9 @@ def _context(roots: list[asn1_x509.Certificate]):
     return ValidationContext(trust_roots=roots, allow_fetching=False, revocation_mode="soft-fail")
 
 
-def _check_manifest_signature(folder: Path, manifest_bytes: bytes, trust: list[asn1_x509.Certificate] | None,
-                              result: Verification) -> asn1_x509.Certificate | None:
-    """Validate the detached CMS signature; return the signer's certificate when it is valid."""
+def _check_manifest_signature(folder: Path, manifest_bytes: bytes,
+                              result: Verification) -> tuple[asn1_x509.Certificate, list[asn1_x509.Certificate]] | None:
+    """Validate the detached CMS signature against its own signer; return the signer and the other certificates."""
     from pyhanko.sign.validation.generic_cms import async_validate_detached_cms
 
     try:
@@ -104,7 +123,7 @@ def _check_manifest_signature(folder: Path, manifest_bytes: bytes, trust: list[a
         signer = next(c for c in certs if sid.name == "issuer_and_serial_number"
                       and c.issuer == sid.chosen["issuer"] and c.serial_number == sid.chosen["serial_number"].native)
         status = asyncio.run(async_validate_detached_cms(manifest_bytes, signed,
-                                                         signer_validation_context=_context(trust or [signer])))
+                                                         signer_validation_context=_context([signer])))
     except FileNotFoundError:
         result.fail(SIGNATURE_NAME, "missing")
         return None
@@ -118,14 +137,13 @@ def _check_manifest_signature(folder: Path, manifest_bytes: bytes, trust: list[a
         result.fail(SIGNATURE_NAME, "signature is not valid")
         return None
     if not status.bottom_line:
-        result.fail(SIGNATURE_NAME, "signer certificate is not trusted" + (" by --trust" if trust else ""))
+        result.fail(SIGNATURE_NAME, "the signer's certificate is not usable for signing (expired, or wrong key usage)")
         return None
     result.passed.append(f"{SIGNATURE_NAME}: valid CMS signature over {MANIFEST_NAME} by {signer.subject.human_friendly}")
-    return signer
+    return signer, [c for c in certs if c is not signer]
 
 
-def _check_pdf(path: Path, trust: list[asn1_x509.Certificate] | None, signer: asn1_x509.Certificate | None,
-               result: Verification) -> None:
+def _check_pdf(path: Path, signer: asn1_x509.Certificate | None, result: Verification) -> None:
     from pyhanko.pdf_utils.reader import PdfFileReader
     from pyhanko.sign.validation import validate_pdf_signature
     from pyhanko.sign.validation.status import SignatureCoverageLevel
@@ -138,8 +156,7 @@ def _check_pdf(path: Path, trust: list[asn1_x509.Certificate] | None, signer: as
             result.fail(name, f"expected one signature, found {len(signatures)}")
             return
         sig = signatures[0]
-        roots = trust or [sig.signer_cert]
-        status = validate_pdf_signature(sig, _context(roots))
+        status = validate_pdf_signature(sig, _context([sig.signer_cert]))
     except Exception as exc:  # a damaged PDF may fail to parse anywhere; that is a failed check
         result.fail(name, f"signature cannot be checked: the file is damaged ({type(exc).__name__})")
         return
@@ -151,7 +168,7 @@ def _check_pdf(path: Path, trust: list[asn1_x509.Certificate] | None, signer: as
     elif status.docmdp_ok is False:
         result.fail(name, "changes after the certification signature violate its DocMDP permissions")
     elif not status.bottom_line:
-        result.fail(name, "PDF signer certificate is not trusted" + (" by --trust" if trust else ""))
+        result.fail(name, "the PDF signer's certificate is not usable for signing (expired, or wrong key usage)")
     elif signer is not None and _fingerprint(sig.signer_cert) != _fingerprint(signer):
         result.fail(name, "signed by a different certificate than the manifest")
     else:
@@ -209,29 +226,80 @@ def _check_evidence(evidence: Path, manifest: Manifest, result: Verification) ->
         result.passed.append(f"evidence: {evidence.name} matches SHA-256 and SHA-512")
 
 
-def verify_bundle(folder: Path, evidence: Path | None = None, trust: Path | None = None) -> Verification:
+def _check_trust(signer: asn1_x509.Certificate, others: list[asn1_x509.Certificate],
+                 anchors: list[tuple[asn1_x509.Certificate, str]], signatures_ok: bool, result: Verification) -> None:
+    """Does the signer chain to a trusted certificate? Offline, at the current time."""
+    from pyhanko_certvalidator import CertificateValidator
+    from pyhanko_certvalidator.errors import PathBuildingError, PathValidationError, ValidationError
+
+    who = f"{signer.subject.human_friendly}, SHA-256 {_fingerprint(signer)}"
+    prefix = "signatures valid but " if signatures_ok else ""
+    if not anchors:
+        result.fail("signer", f"{prefix}signer not trusted: {who} (the trust store is empty; add a certificate with "
+                              "`forensics keys trust add CERT` or give --trust CERT)")
+        return
+    validator = CertificateValidator(signer, intermediate_certs=others,
+                                     validation_context=_context([cert for cert, _ in anchors]))
+    try:
+        path = asyncio.run(validator.async_validate_path())
+    except (PathBuildingError, PathValidationError, ValidationError):
+        result.fail("signer", f"{prefix}signer not trusted: {who}")
+        return
+    root = path.trust_anchor.authority.certificate if hasattr(path.trust_anchor.authority, "certificate") else None
+    origin = next((where for cert, where in anchors if root is not None and cert.dump() == root.dump()), "trust store")
+    result.passed.append(f"signer: {who}, trusted ({origin})")
+
+
+def _check_outputs(folder: Path, manifest: Manifest, result: Verification) -> None:
+    """Every produced document listed, and findings.json about the evidence the manifest names."""
+    listed = {f.name for f in manifest.files}
+    for name in manifest.outputs or []:
+        if name not in listed:
+            result.fail(name, "missing: the manifest records it as produced but does not list it")
+    if FINDINGS_NAME in listed and (folder / FINDINGS_NAME).is_file():
+        try:
+            doc = json.loads((folder / FINDINGS_NAME).read_text(encoding="utf-8"))
+            sha = doc["evidence"]["sha256"]
+        except (OSError, ValueError, KeyError, TypeError, RecursionError):
+            result.fail(FINDINGS_NAME, "unreadable: not the findings of a forensics run")
+            return
+        if sha != manifest.evidence.get("sha256"):
+            result.fail(FINDINGS_NAME, "is about other evidence than the manifest names")
+
+
+def verify_bundle(folder: Path, evidence: Path | None = None, trust: Path | Sequence[Path] = ()) -> Verification:
     """Run every check on the bundle in ``folder``; see the module docstring.
+
+    Parameters
+    ----------
+    folder : Path
+        The bundle.
+    evidence : Path, optional
+        The evidence photo, hashed and compared with the manifest.
+    trust : Path or sequence of Path
+        Certificates trusted for this run, besides the trust store's.
 
     Raises
     ------
     ValueError
-        When ``trust`` cannot be read (a usage error, not a failed check).
+        When a ``trust`` certificate cannot be read (a usage error, not a failed check).
     """
     result = Verification()
-    roots = load_trust(trust) if trust is not None else None
+    anchors = _anchors([trust] if isinstance(trust, Path) else list(trust))
     try:
         manifest_bytes = (folder / MANIFEST_NAME).read_bytes()
     except OSError:
         result.fail(MANIFEST_NAME, "missing")
         return result
-    signer = _check_manifest_signature(folder, manifest_bytes, roots, result)
-    if signer is None:
+    signed = _check_manifest_signature(folder, manifest_bytes, result)
+    if signed is None:
         # An unauthenticated manifest says nothing about the other files; the
         # PDF's own signature can still be checked.
         if (folder / PDF_NAME).is_file():
-            _check_pdf(folder / PDF_NAME, roots, None, result)
+            _check_pdf(folder / PDF_NAME, None, result)
         result.notes.append("files not compared with the manifest, whose signature failed")
         return result
+    signer, others = signed
     try:
         manifest = Manifest.from_bytes(manifest_bytes)
     except (ValueError, UnicodeDecodeError) as exc:
@@ -240,13 +308,15 @@ def verify_bundle(folder: Path, evidence: Path | None = None, trust: Path | None
     if manifest.signer.get("sha256_fingerprint") != _fingerprint(signer):
         result.fail(MANIFEST_NAME, "names a different signing certificate than the one that signed it")
     _check_files(folder, manifest, result)
+    _check_outputs(folder, manifest, result)
+    pdf_failed = False
     if any(f.name == PDF_NAME for f in manifest.files) and (folder / PDF_NAME).is_file():
-        _check_pdf(folder / PDF_NAME, roots, signer, result)
+        before = len(result.problems)
+        _check_pdf(folder / PDF_NAME, signer, result)
+        pdf_failed = any(p.subject == PDF_NAME for p in result.problems[before:])
+    _check_trust(signer, others, anchors, not pdf_failed, result)
     if evidence is not None:
         _check_evidence(evidence, manifest, result)
-    if roots is None:
-        result.notes.append("signer identity not checked: no --trust certificate given, so the signatures prove the "
-                            "files are unchanged since signing, not who signed them")
     if manifest.signer.get("self_signed"):
         result.notes.append(f"the signing certificate is self-signed ({manifest.signer.get('subject')}, "
                             f"SHA-256 {manifest.signer.get('sha256_fingerprint')})")

@@ -112,6 +112,8 @@ def write_bundle(findings: Findings, evidence: Evidence, folder: Path, key: Exam
         exhibit_id=options.exhibit_id, evidence=evidence_entry(findings.evidence),
         signer={"subject": key.subject, "sha256_fingerprint": key.fingerprint, "self_signed": key.self_signed},
         files=file_entries(folder, names),
+        outputs=[FINDINGS_NAME] + [n for f, n in (("html", HTML_NAME), ("pdf", PDF_NAME)) if f in formats]
+        + [SIGNER_CERT_NAME],
     ).to_bytes()
     result.files.append(write_atomic(folder / MANIFEST_NAME, manifest))
     result.files.append(write_atomic(folder / SIGNATURE_NAME, sign_detached(manifest, key, tsa_url=tsa_url)))

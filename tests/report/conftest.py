@@ -5,16 +5,17 @@ from pathlib import Path
 
 import pytest
 
-from forensics_core import signing
+from forensics_core import signing, trust
 from report_helpers import make_bundle
 
 
 @pytest.fixture(autouse=True)
-def isolated_home(tmp_path, monkeypatch):
-    """Keys made on first use go to a folder of this test, never the user's."""
+def isolated_home(tmp_path, monkeypatch, key_files):
+    """Keys made on first use go to a folder of this test, never the user's; its trust store holds the test key."""
     home = tmp_path / "forensics-home"
     monkeypatch.setenv("FORENSICS_HOME", str(home))
     monkeypatch.delenv("FORENSICS_KEY_PASSWORD", raising=False)
+    trust.add(key_files[1])
     return home
 
 

@@ -18,7 +18,7 @@ import pytest
 from cryptography.hazmat.primitives.asymmetric import ed25519
 from cryptography.hazmat.primitives.serialization import NoEncryption, pkcs12
 
-from forensics_core import signing
+from forensics_core import signing, trust
 from forensics_core.manifest import MANIFEST_NAME, SIGNATURE_NAME
 from forensics_core.verify import verify_bundle
 from report_helpers import make_bundle, pdf_pages_text, run
@@ -37,15 +37,17 @@ def failures(result) -> list[str]:
     return [str(p) for p in result.problems]
 
 
-def test_untouched_bundle_verifies_with_and_without_trust(bundle, data_dir, key_files):
-    out = run("verify", bundle, "--evidence", data_dir / "exif" / "Canon_40D.jpg", "--trust", key_files[1])
-    assert out.returncode == 0, out.stderr
-    assert out.stdout.strip().endswith(f"verified: {bundle}")
-    assert "report.pdf: certification signature valid, covers the entire file" in out.stdout
-    assert out.stderr == ""
-    plain = run("verify", bundle)
+def test_untouched_bundle_verifies_by_the_store_or_by_trust_for_the_run(bundle, data_dir, key_files, key):
+    plain = run("verify", bundle, "--evidence", data_dir / "exif" / "Canon_40D.jpg")
     assert plain.returncode == 0, plain.stderr
-    assert "signer identity not checked" in plain.stdout and "self-signed" in plain.stdout
+    assert plain.stdout.strip().endswith(f"verified: {bundle}")
+    assert "report.pdf: certification signature valid, covers the entire file" in plain.stdout
+    assert f"SHA-256 {key.fingerprint}, trusted (trust store)" in plain.stdout and "self-signed" in plain.stdout
+    assert plain.stderr == ""
+    trust.remove(key.fingerprint)
+    once = run("verify", bundle, "--trust", key_files[1])
+    assert once.returncode == 0, once.stderr
+    assert "trusted (--trust)" in once.stdout
 
 
 def test_manifest_lists_every_file_and_the_evidence(bundle, data_dir):
@@ -97,12 +99,13 @@ def test_an_extra_or_missing_file_fails(bundle_copy):
     assert "notes.txt: not listed in the manifest" in got and "report.html: missing" in got
 
 
-def test_another_trust_anchor_fails(bundle, tmp_path):
+def test_another_trust_anchor_fails(bundle, tmp_path, key):
     p12, cert = signing.create_self_signed("Someone Else", "Elsewhere")
     _, pem = signing.write_key_files(tmp_path, p12, cert)
+    trust.remove(key.fingerprint)
     got = failures(verify_bundle(bundle, trust=pem))
-    assert "manifest.json.p7s: signer certificate is not trusted by --trust" in got
-    assert "report.pdf: PDF signer certificate is not trusted by --trust" in got
+    assert got == [f"signer: signatures valid but signer not trusted: Organization: Forensic Lab <Test>, Common Name: "
+                   f"Dr. Ada Examiner, SHA-256 {key.fingerprint}"]
 
 
 def test_pdf_is_a_pades_certification_with_no_changes_permitted(bundle, key):
@@ -142,9 +145,9 @@ def test_keys_create_makes_a_usable_protected_key(tmp_path, data_dir):
     env = {"FORENSICS_KEY_PASSWORD": "correct horse"}
     out = run("keys", "create", "--name", "Dr. Ada Examiner", "--org", "Lab", "--out", tmp_path / "k", env=env)
     assert out.returncode == 0, out.stderr
-    p12, pem = tmp_path / "k" / "examiner.p12", tmp_path / "k" / "examiner.pem"
+    p12 = tmp_path / "k" / "examiner.p12"
     assert p12.stat().st_mode & 0o077 == 0
-    assert "SHA-256:" in out.stdout and "self-signed" in out.stdout
+    assert "SHA-256:" in out.stdout and "self-signed" in out.stdout and "trusted:     yes" in out.stdout
     with pytest.raises(signing.SigningError, match="wrong password"):
         signing.load_key(p12, b"wrong")
     again = run("keys", "create", "--name", "X", "--org", "Y", "--out", tmp_path / "k", env=env)
@@ -154,7 +157,7 @@ def test_keys_create_makes_a_usable_protected_key(tmp_path, data_dir):
                    "--key", p12, "--exhibit-id", "E-2", "--paper", "letter", env=env)
     assert analysed.returncode == 0, analysed.stderr
     folder = tmp_path / "out" / "Canon_40D"
-    assert run("verify", folder, "--trust", pem).returncode == 0
+    assert run("verify", folder).returncode == 0, "a key made by `keys create` is trusted"
     wrong = run("analyze", data_dir / "exif" / "Canon_40D.jpg", "--out", tmp_path / "out2", "--key", p12,
                 env={"FORENSICS_KEY_PASSWORD": "nope"})
     assert wrong.returncode == 2 and "wrong password" in wrong.stderr and "Traceback" not in wrong.stderr
@@ -211,7 +214,8 @@ def test_xdg_config_home_is_honoured(tmp_path, data_dir, monkeypatch):
     assert (xdg / "forensics" / "examiner.p12").is_file()
     folder = tmp_path / "o" / "Canon_40D"
     assert not (folder / "report.pdf").exists() and (folder / "report.html").exists()
-    assert verify_bundle(folder).ok
+    assert (xdg / "forensics" / "trusted").is_dir()
+    assert run("verify", folder, env={"XDG_CONFIG_HOME": str(xdg)}).returncode == 0
 
 
 def test_json_only_needs_no_key(tmp_path, data_dir, isolated_home):
@@ -219,7 +223,7 @@ def test_json_only_needs_no_key(tmp_path, data_dir, isolated_home):
               "--detectors", "")
     assert out.returncode == 0
     assert sorted(p.name for p in (tmp_path / "o" / "Canon_40D").iterdir()) == ["findings.json"]
-    assert not isolated_home.exists()
+    assert not (isolated_home / "examiner.p12").exists()
 
 
 @pytest.mark.parametrize("kind", ["fifo", "device", "other_size"])
@@ -266,17 +270,19 @@ def test_without_a_named_examiner_the_report_says_so_instead_of_a_login(tmp_path
     assert "CN=unnamed examiner" in subject and "CN=root" not in subject
 
 
-def test_verify_prints_one_line_per_failure_and_no_library_traceback(bundle_copy, tmp_path, key_files):
+def test_verify_prints_one_line_per_failure_and_no_library_traceback(bundle_copy, tmp_path, key):
     from pyhanko.pdf_utils import generic
     from pyhanko.pdf_utils.incremental_writer import IncrementalPdfFileWriter
 
     other = tmp_path / "other.pem"
     subprocess.run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-keyout", str(tmp_path / "k.pem"),
                     "-out", str(other), "-subj", "/CN=other", "-days", "2"], check=True, capture_output=True)
+    trust.remove(key.fingerprint)
     untrusted = run("verify", bundle_copy, "--trust", other)
     assert untrusted.returncode == 1 and "Traceback" not in untrusted.stderr
-    assert all(line.startswith("forensics: error: ") for line in untrusted.stderr.strip().splitlines())
-    assert "log:" in run("verify", bundle_copy, "--trust", other, "--verbose").stderr
+    assert untrusted.stderr.strip().splitlines() == [
+        f"forensics: error: signer: signatures valid but signer not trusted: Organization: Forensic Lab <Test>, "
+        f"Common Name: Dr. Ada Examiner, SHA-256 {key.fingerprint}"]
     pdf = bundle_copy / "report.pdf"
     writer = IncrementalPdfFileWriter(BytesIO(pdf.read_bytes()))
     writer.root["/Lang"] = generic.TextStringObject("fr")
@@ -287,3 +293,4 @@ def test_verify_prints_one_line_per_failure_and_no_library_traceback(bundle_copy
     updated = run("verify", bundle_copy)
     assert updated.returncode == 1 and "Traceback" not in updated.stderr
     assert all(line.startswith("forensics: error: ") for line in updated.stderr.strip().splitlines())
+    assert "log:" in run("verify", bundle_copy, "--verbose").stderr

@@ -1,0 +1,171 @@
+"""Signer trust (issue 16, item 13): a valid signature by an untrusted signer is not a verified bundle."""
+
+import json
+from datetime import datetime, timedelta, timezone
+
+from cryptography import x509
+from cryptography.hazmat.primitives import hashes, serialization
+from cryptography.hazmat.primitives.asymmetric import ec
+from cryptography.hazmat.primitives.serialization import NoEncryption, pkcs12
+from cryptography.x509.oid import NameOID
+
+from forensics_core import signing, trust
+from forensics_core.manifest import MANIFEST_NAME, PDF_NAME, SIGNATURE_NAME, SIGNER_CERT_NAME, sha256_file
+from report_helpers import make_bundle, run
+
+
+def forge(folder, key, drop=(PDF_NAME,), keep_outputs=False):
+    """What an attacker does: rewrite the verdict, drop files, put their certificate in and re-sign the manifest."""
+    findings = json.loads((folder / "findings.json").read_text())
+    findings["verdict"]["label"] = "inconsistent"
+    (folder / "findings.json").write_text(json.dumps(findings))
+    for name in drop:
+        (folder / name).unlink()
+    (folder / SIGNER_CERT_NAME).write_bytes(key.cert_pem)
+    manifest = json.loads((folder / MANIFEST_NAME).read_text())
+    manifest["signer"] = {"subject": key.subject, "sha256_fingerprint": key.fingerprint, "self_signed": True}
+    manifest["files"] = [{"name": f["name"], "size": (folder / f["name"]).stat().st_size,
+                          "sha256": sha256_file(folder / f["name"])}
+                         for f in manifest["files"] if f["name"] not in drop]
+    if not keep_outputs:
+        manifest["outputs"] = [n for n in manifest["outputs"] if n not in drop]
+    data = json.dumps(manifest).encode()
+    (folder / MANIFEST_NAME).write_bytes(data)
+    (folder / SIGNATURE_NAME).write_bytes(signing.sign_detached(data, key))
+
+
+def attacker_key(tmp_path, name="Mallory"):
+    p12, cert = signing.create_self_signed(name, "Nowhere")
+    p12_path, pem = signing.write_key_files(tmp_path / name, p12, cert)
+    return signing.load_key(p12_path, None), pem
+
+
+def test_a_bundle_re_signed_by_an_unknown_key_is_not_verified(bundle_copy, tmp_path):
+    mallory, _ = attacker_key(tmp_path)
+    forge(bundle_copy, mallory)
+    out = run("verify", bundle_copy)
+    assert out.returncode == 1
+    assert out.stderr.strip().splitlines() == [
+        f"forensics: error: signer: signatures valid but signer not trusted: Organization: Nowhere, "
+        f"Common Name: Mallory, SHA-256 {mallory.fingerprint}"]
+    assert "verified" not in out.stdout
+
+
+def test_a_missing_output_fails_even_when_the_signer_is_trusted(bundle_copy, tmp_path):
+    mallory, pem = attacker_key(tmp_path)
+    forge(bundle_copy, mallory, keep_outputs=True)
+    out = run("verify", bundle_copy, "--trust", pem)
+    assert out.returncode == 1
+    assert out.stderr.strip().splitlines() == [
+        "forensics: error: report.pdf: missing: the manifest records it as produced but does not list it"]
+
+
+def test_findings_about_other_evidence_fail(bundle_copy, tmp_path):
+    mallory, pem = attacker_key(tmp_path)
+    findings = json.loads((bundle_copy / "findings.json").read_text())
+    findings["evidence"]["sha256"] = "0" * 64
+    (bundle_copy / "findings.json").write_text(json.dumps(findings))
+    forge(bundle_copy, mallory, drop=())
+    out = run("verify", bundle_copy, "--trust", pem)
+    assert out.returncode == 1
+    assert "forensics: error: findings.json: is about other evidence than the manifest names" in out.stderr
+
+
+def test_trust_store_commands(tmp_path, isolated_home, key):
+    mallory, pem = attacker_key(tmp_path)
+    listed = run("keys", "trust", "list")
+    assert listed.returncode == 0 and key.fingerprint in listed.stdout and mallory.fingerprint not in listed.stdout
+    added = run("keys", "trust", "add", pem)
+    assert added.returncode == 0 and added.stdout.startswith(f"trusted: {mallory.fingerprint}  O=Nowhere,CN=Mallory")
+    assert run("keys", "trust", "add", pem).returncode == 0, "adding twice changes nothing"
+    assert len(list((isolated_home / "trusted").glob("*.pem"))) == 2
+    assert mallory.fingerprint in run("keys", "trust", "list").stdout
+
+    prefix = mallory.fingerprint.replace(":", "")[:10].lower()
+    removed = run("keys", "trust", "remove", prefix)
+    assert removed.returncode == 0 and removed.stdout.startswith(f"removed: {mallory.fingerprint}")
+    assert mallory.fingerprint not in run("keys", "trust", "list").stdout
+
+    again = run("keys", "trust", "remove", prefix)
+    assert again.returncode == 1 and again.stderr.strip() == (
+        f"forensics: error: keys trust remove: no trusted certificate matches '{prefix}'")
+    short = run("keys", "trust", "remove", "ab")
+    assert short.returncode == 1 and "8 hex digits at least" in short.stderr
+    assert run("keys", "trust", "remove", key_pem := tmp_path / "k.pem").returncode == 1
+    key_pem.write_bytes(key.cert_pem)
+    assert run("keys", "trust", "remove", key_pem).returncode == 0
+    assert "is empty" in run("keys", "trust", "list").stdout
+
+    junk = tmp_path / "junk.pem"
+    junk.write_text("not a certificate")
+    bad = run("keys", "trust", "add", junk)
+    assert bad.returncode == 1 and len(bad.stderr.strip().splitlines()) == 1
+    assert "holds no readable certificate" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def test_the_examiner_s_own_key_is_trusted_when_made_and_a_removal_sticks(tmp_path, data_dir, isolated_home):
+    photo = data_dir / "exif" / "Canon_40D.jpg"
+    trust.remove(trust.trusted()[0].fingerprint)
+    (isolated_home / "trusted").rmdir()
+    made = run("analyze", photo, "--out", tmp_path / "a", "--detectors", "", "--format", "html")
+    assert made.returncode == 0, made.stderr
+    own = signing.load_key(isolated_home / "examiner.p12", None)
+    assert [t.fingerprint for t in trust.trusted()] == [own.fingerprint]
+    assert run("verify", tmp_path / "a" / "Canon_40D").returncode == 0
+
+    trust.remove(own.fingerprint)
+    assert run("analyze", photo, "--out", tmp_path / "b", "--detectors", "", "--format", "html").returncode == 0
+    assert trust.trusted() == []
+    assert run("verify", tmp_path / "b" / "Canon_40D").returncode == 1
+
+
+def test_a_key_made_before_trust_stores_is_trusted_on_first_use(tmp_path, data_dir, isolated_home):
+    trust.remove(trust.trusted()[0].fingerprint)
+    (isolated_home / "trusted").rmdir()
+    p12, cert = signing.create_self_signed("Old Key", "Lab")
+    signing.write_key_files(isolated_home, p12, cert)
+    assert not (isolated_home / "trusted").exists()
+    out = run("analyze", data_dir / "exif" / "Canon_40D.jpg", "--out", tmp_path / "o", "--detectors", "",
+              "--format", "html")
+    assert out.returncode == 0, out.stderr
+    assert [t.subject for t in trust.trusted()] == ["O=Lab,CN=Old Key"]
+
+
+def _issued_key(tmp_path):
+    """A CA certificate and an examiner key it issued (PKCS#12 path)."""
+    now = datetime.now(timezone.utc)
+    ca_key = ec.generate_private_key(ec.SECP256R1())
+    ca_name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "Lab Root CA")])
+    ca = (x509.CertificateBuilder().subject_name(ca_name).issuer_name(ca_name).public_key(ca_key.public_key())
+          .serial_number(1).not_valid_before(now - timedelta(hours=1)).not_valid_after(now + timedelta(days=30))
+          .add_extension(x509.BasicConstraints(ca=True, path_length=None), critical=True)
+          .add_extension(x509.KeyUsage(digital_signature=False, content_commitment=False, key_encipherment=False,
+                                       data_encipherment=False, key_agreement=False, key_cert_sign=True,
+                                       crl_sign=True, encipher_only=False, decipher_only=False), critical=True)
+          .sign(ca_key, hashes.SHA256()))
+    leaf_key = ec.generate_private_key(ec.SECP256R1())
+    leaf = (x509.CertificateBuilder()
+            .subject_name(x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "Issued Examiner"),
+                                     x509.NameAttribute(NameOID.ORGANIZATION_NAME, "Lab")]))
+            .issuer_name(ca_name).public_key(leaf_key.public_key()).serial_number(2)
+            .not_valid_before(now - timedelta(hours=1)).not_valid_after(now + timedelta(days=30))
+            .add_extension(x509.KeyUsage(digital_signature=True, content_commitment=True, key_encipherment=False,
+                                         data_encipherment=False, key_agreement=False, key_cert_sign=False,
+                                         crl_sign=False, encipher_only=False, decipher_only=False), critical=True)
+            .sign(ca_key, hashes.SHA256()))
+    p12 = tmp_path / "issued.p12"
+    p12.write_bytes(pkcs12.serialize_key_and_certificates(b"issued", leaf_key, leaf, [ca], NoEncryption()))
+    ca_pem = tmp_path / "ca.pem"
+    ca_pem.write_bytes(ca.public_bytes(serialization.Encoding.PEM))
+    return p12, ca_pem
+
+
+def test_a_signer_issued_by_a_trusted_ca_is_trusted(tmp_path, data_dir):
+    p12, ca_pem = _issued_key(tmp_path)
+    folder = make_bundle(data_dir / "exif" / "Canon_40D.jpg", tmp_path / "b", signing.load_key(p12, None),
+                         plugins=())
+    assert run("verify", folder).returncode == 1
+    assert run("keys", "trust", "add", ca_pem).returncode == 0
+    out = run("verify", folder)
+    assert out.returncode == 0, out.stderr
+    assert "Common Name: Issued Examiner" in out.stdout and "trusted (trust store)" in out.stdout
