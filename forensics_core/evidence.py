@@ -156,11 +156,16 @@ class Evidence:
         ``info.decoder_note``).
         """
         px = self.pixels
-        if px.ndim == 3:
-            px = px[..., :3] @ _LUMA[: min(3, px.shape[2])] if px.shape[2] >= 3 else px[..., 0]
-        px = np.asarray(px, dtype=np.float64)
-        scale = {"uint8": 255.0, "uint16": 65535.0, "int32": 65535.0}.get(self.pixels.dtype.name, 1.0)
-        out = px / scale
+        scale = {"uint8": 255.0, "uint16": 65535.0, "int32": 65535.0}.get(px.dtype.name, 1.0)
+        out = np.empty(px.shape[:2], dtype=np.float64)
+        # By bands of rows: converting a whole 100 MP colour grid to float64
+        # before the weighted sum would hold 2.4 GB of temporaries.
+        rows = max(1, (1 << 20) // max(1, px.shape[1]))
+        for top in range(0, px.shape[0], rows):
+            band = px[top:top + rows]
+            if band.ndim == 3:
+                band = band[..., :3] @ _LUMA if band.shape[2] >= 3 else band[..., 0]
+            np.divide(band, scale, out=out[top:top + rows], casting="unsafe")
         if not np.isfinite(out).all():
             out = np.nan_to_num(out, nan=0.0, posinf=0.0, neginf=0.0)
         out.flags.writeable = False

@@ -44,24 +44,65 @@ class LumaCoefficients:
     height: int
     width: int
 
-    def decoded(self) -> np.ndarray:
-        """The luma blocks the decoder computes before rounding and clipping, shape (h, w, 8, 8), grey levels."""
-        return idctn(self.quantised * self.table, axes=(2, 3), norm="ortho") + 128.0
+    def decoded(self, top: int = 0, bottom: int | None = None) -> np.ndarray:
+        """Luma blocks the decoder computes before rounding and clipping, of block rows ``top:bottom``.
 
-    def unreliable(self, decoded: np.ndarray, margin: float) -> np.ndarray:
-        """Blocks whose quantisation history cannot be read, boolean, shape (h, w).
+        Returns
+        -------
+        ndarray, shape (bottom - top, w, 8, 8)
+            Grey levels.
+        """
+        return idctn(self.quantised[top:bottom] * self.table, axes=(2, 3), norm="ortho") + 128.0
 
-        A block with a pixel within ``margin`` grey levels of 0 or 255 was
-        probably clipped by an earlier decoder, which moves its coefficients
-        off the earlier quantisation lattice; a block that extends past the
-        photo's edge was padded anew by each encoder.
+    def unreliable(self, decoded: np.ndarray, margin: float, top: int = 0) -> np.ndarray:
+        """Blocks whose quantisation history cannot be read, boolean, shape ``decoded.shape[:2]``.
+
+        ``decoded`` holds the block rows from ``top`` on. A block with a pixel
+        within ``margin`` grey levels of 0 or 255 was probably clipped by an
+        earlier decoder, which moves its coefficients off the earlier
+        quantisation lattice; a block that extends past the photo's edge was
+        padded anew by each encoder.
         """
         bad = ((decoded < margin) | (decoded > 255.0 - margin)).any(axis=(2, 3))
         if self.height % 8:
-            bad[self.height // 8:, :] = True
+            bad[max(0, self.height // 8 - top):, :] = True
         if self.width % 8:
             bad[:, self.width // 8:] = True
         return bad
+
+    def scan(self, margin: float, frequencies: np.ndarray, band: int = 32) -> tuple[np.ndarray, np.ndarray]:
+        """The unreliable blocks and the calibrated coefficients of ``frequencies``, by bands of block rows.
+
+        Decoding all blocks at once holds several float64 copies of the
+        photo (about 0.8 GB each at 100 MP); a band of ``band`` block rows
+        holds a few tens of MB, and each block's result is the same.
+
+        Parameters
+        ----------
+        margin : float
+            See :meth:`unreliable`.
+        frequencies : ndarray of int, shape (k,)
+            Flat indices (row * 8 + column) of the frequencies wanted.
+        band : int
+            Block rows decoded at a time.
+
+        Returns
+        -------
+        unreliable : ndarray of bool, shape (h, w)
+        unquantised : ndarray of float, shape (h - 1, w - 1, k)
+            :func:`calibrated` at the chosen frequencies.
+        """
+        h, w = self.quantised.shape[:2]
+        unreliable = np.empty((h, w), bool)
+        unquantised = np.empty((h - 1, w - 1, len(frequencies)))
+        rows, cols = np.divmod(np.asarray(frequencies, dtype=int), 8)
+        for top in range(0, h, band):
+            bottom = min(h, top + band)
+            decoded = self.decoded(top, min(h, bottom + 1))
+            unreliable[top:bottom] = self.unreliable(decoded[:bottom - top], margin, top)
+            if top < h - 1:
+                unquantised[top:min(bottom, h - 1)] = calibrated(decoded)[:, :, rows, cols]
+        return unreliable, unquantised
 
 
 def read_luma(data: bytes) -> LumaCoefficients | None:
@@ -87,6 +128,8 @@ def read_luma(data: bytes) -> LumaCoefficients | None:
 
 def calibrated(decoded: np.ndarray) -> np.ndarray:
     """DCT coefficients of the decoded luma on a grid shifted by 4 pixels, shape (h-1, w-1, 8, 8).
+
+    ``decoded`` has shape (h, w, 8, 8), grey levels (:meth:`LumaCoefficients.decoded`).
 
     Off the compression grid, the coefficients follow (approximately) the
     distribution the photo's content had before any quantisation, which is

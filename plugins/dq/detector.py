@@ -24,7 +24,7 @@ import numpy as np
 
 from forensics_core import DetectorResult, DetectorSpec, Evidence, Status
 
-from .coefficients import ZIGZAG, LumaCoefficients, calibrated, read_luma
+from .coefficients import ZIGZAG, LumaCoefficients, read_luma
 from .primary import Primary, estimate
 from .regions import overdispersion, scan
 from .votes import activity, block_log_ratio, null_rates
@@ -64,15 +64,14 @@ SPEC = DetectorSpec(
 )
 
 
-def _primaries(coef: LumaCoefficients, decoded: np.ndarray, unreliable: np.ndarray,
+def _primaries(coef: LumaCoefficients, unquantised: np.ndarray, unreliable: np.ndarray,
                params: Mapping[str, Any]) -> list[tuple[tuple[int, int], Primary | None, bool]]:
-    unquantised = calibrated(decoded)
     rng = np.random.default_rng(int(params["seed"]))
     out = []
-    for flat in ZIGZAG[1:1 + int(params["n_frequencies"])]:
+    for k, flat in enumerate(ZIGZAG[1:1 + int(params["n_frequencies"])]):
         i, j = divmod(int(flat), 8)
         q2 = int(coef.table[i, j])
-        found = estimate(coef.quantised[:, :, i, j][~unreliable], unquantised[:, :, i, j].ravel(), q2, rng)
+        found = estimate(coef.quantised[:, :, i, j][~unreliable], unquantised[:, :, k].ravel(), q2, rng)
         kept = found is not None and found.log_lik >= float(params["min_gain_nats"]) \
             and found.alpha >= float(params["min_alpha"])
         out.append(((i, j), found, kept))
@@ -98,9 +97,9 @@ def votes(evidence: Evidence, params: Mapping[str, Any]) -> dict[str, Any] | Non
     coef = read_luma(evidence.data)
     if coef is None or min(coef.quantised.shape[:2]) < 2:
         return None
-    decoded = coef.decoded()
-    unreliable = coef.unreliable(decoded, float(params["clip_margin"]))
-    primaries = _primaries(coef, decoded, unreliable, params)
+    unreliable, unquantised = coef.scan(float(params["clip_margin"]), ZIGZAG[1:1 + int(params["n_frequencies"])])
+    primaries = _primaries(coef, unquantised, unreliable, params)
+    del unquantised
     out: dict[str, Any] = {"coef": coef, "primaries": primaries, "unreliable": unreliable}
     used = [(f, p) for f, p, kept in primaries if kept]
     if len(used) < int(params["min_frequencies"]):

@@ -1,0 +1,142 @@
+"""Peak memory of ``forensics analyze`` on a very large photo, the whole process tree counted once.
+
+Usage: ``python benchmarks/memory.py [--runs 3] [--mp 100] [--format json] [--photo FILE]``
+
+Without ``--photo``, a synthetic authentic JPEG of ``--mp`` megapixels (4:3,
+quality 90: a photo of a building from the lens plugin's scene model, scaled
+up, with sensor-like noise) is made once into ``benchmarks/out/``. Each run
+starts ``forensics analyze`` (all detectors) as a fresh process and samples,
+every 50 ms, the proportional set size (PSS, ``/proc/PID/smaps_rollup``) of
+the command and of every process below it: detectors run in forked children
+that share the parent's pages copy-on-write, so adding their RSS would count
+the decoded photo twice, while PSS counts each page once. Printed: the median
+and range over the runs of the tree's peak PSS, of the command's own peak RSS
+(``VmHWM``), and of the wall time. Target (issue 16): at most 2.5 GB at 100 MP.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+OUT = Path(__file__).resolve().parent / "out"
+
+
+def photo(mp: float) -> Path:
+    import numpy as np
+    from PIL import Image
+
+    w = int(round(math.sqrt(mp * 1e6 * 4 / 3) / 8) * 8)
+    h = int(round(w * 3 / 4 / 8) * 8)
+    path = OUT / f"memory_{w}x{h}.jpg"
+    if path.exists():
+        return path
+    from forensics_plugins.lens_distortion.synth import render_authentic
+
+    OUT.mkdir(parents=True, exist_ok=True)
+    small = render_authentic(11, size=(w // 4, h // 4), k1=0.06, jpeg_quality=95).jpeg_bytes
+    with tempfile.NamedTemporaryFile(suffix=".jpg") as tmp:
+        tmp.write(small)
+        tmp.flush()
+        base = Image.open(tmp.name).convert("RGB").resize((w, h), Image.Resampling.BICUBIC)
+    rng = np.random.default_rng(7)
+    rows = np.asarray(base, dtype=np.int16)
+    del base
+    for top in range(0, h, 512):
+        block = rows[top:top + 512]
+        block += rng.normal(0, 2.0, block.shape).round().astype(np.int16)
+    Image.fromarray(np.clip(rows, 0, 255).astype(np.uint8)).save(path, quality=90)
+    return path
+
+
+def _tree(root: int) -> list[int]:
+    """``root`` and every process below it, from /proc's parent links."""
+    children: dict[int, list[int]] = {}
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat") as fh:
+                ppid = int(fh.read().rsplit(")", 1)[1].split()[1])
+        except (OSError, IndexError, ValueError):
+            continue
+        children.setdefault(ppid, []).append(int(entry))
+    found, todo = [], [root]
+    while todo:
+        pid = todo.pop()
+        found.append(pid)
+        todo.extend(children.get(pid, []))
+    return found
+
+
+def _pss_kb(pid: int) -> int:
+    try:
+        with open(f"/proc/{pid}/smaps_rollup") as fh:
+            for line in fh:
+                if line.startswith("Pss:"):
+                    return int(line.split()[1])
+    except OSError:
+        pass
+    return 0
+
+
+def _hwm_kb(pid: int) -> int:
+    try:
+        with open(f"/proc/{pid}/status") as fh:
+            for line in fh:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1])
+    except OSError:
+        pass
+    return 0
+
+
+def one_run(target: Path, fmt: str, env: dict[str, str]) -> dict[str, float]:
+    with tempfile.TemporaryDirectory() as out:
+        t0 = time.perf_counter()
+        proc = subprocess.Popen([sys.executable, "-m", "forensics_core", "analyze", str(target), "--out", out,
+                                 "--format", fmt], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        peak_tree = peak_main = 0
+        while proc.poll() is None:
+            peak_tree = max(peak_tree, sum(_pss_kb(p) for p in _tree(proc.pid)))
+            peak_main = max(peak_main, _hwm_kb(proc.pid))
+            time.sleep(0.05)
+        wall = time.perf_counter() - t0
+        stderr = proc.stderr.read().decode(errors="replace")
+        if proc.returncode != 0:
+            raise SystemExit(f"analyze failed ({proc.returncode}): {stderr.strip()[:500]}")
+    return {"tree_mb": peak_tree / 1024, "main_mb": peak_main / 1024, "wall_s": wall}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--mp", type=float, default=100.0, help="Megapixels of the synthetic photo.")
+    parser.add_argument("--format", default="json", help="analyze's --format (default json).")
+    parser.add_argument("--photo", type=Path, help="Measure this photo instead of the synthetic one.")
+    args = parser.parse_args()
+    target = args.photo or photo(args.mp)
+    with tempfile.TemporaryDirectory() as home:
+        env = {**os.environ, "FORENSICS_HOME": home}
+        runs = [one_run(target, args.format, env) for _ in range(args.runs)]
+    from PIL import Image
+
+    with Image.open(target) as im:
+        size = f"{im.width}x{im.height} ({im.width * im.height / 1e6:.0f} MP)"
+    print(f"{target.name}: {size}, --format {args.format}, {args.runs} runs in fresh processes")
+    print(f"{'':<30}{'median':>9}{'min':>9}{'max':>9}")
+    for key, label in (("tree_mb", "peak PSS, process tree MB"), ("main_mb", "peak RSS, command MB"),
+                       ("wall_s", "wall time s")):
+        v = [r[key] for r in runs]
+        print(f"{label:<30}{statistics.median(v):>9.0f}{min(v):>9.0f}{max(v):>9.0f}")
+
+
+if __name__ == "__main__":
+    main()
