@@ -30,7 +30,8 @@ BAND_ROWS = 750
 _CHILD = r"""
 import forensics_core
 from forensics_core.evidence import load_evidence
-from forensics_plugins.cfa.detector import DEFAULT_PARAMS, analyse
+from forensics_plugins.cfa.detector import analyse
+from forensics_plugins.cfa.spec import DEFAULT_PARAMS
 from forensics_plugins.cfa.figures import map_png
 base = hwm_mb()
 t0 = time.perf_counter()

@@ -22,7 +22,8 @@ OUT = Path(__file__).resolve().parent / "out"
 _CHILD = r"""
 import forensics_core
 from forensics_core.evidence import load_evidence
-from forensics_plugins.copy_move.detector import DEFAULT_PARAMS, analyse
+from forensics_plugins.copy_move.detector import analyse
+from forensics_plugins.copy_move.spec import DEFAULT_PARAMS
 from forensics_plugins.copy_move.figures import overlay_png
 base = hwm_mb()
 t0 = time.perf_counter()

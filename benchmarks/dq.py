@@ -22,7 +22,8 @@ OUT = Path(__file__).resolve().parent / "out"
 _CHILD = r"""
 import forensics_core
 from forensics_core.evidence import load_evidence
-from forensics_plugins.dq.detector import DEFAULT_PARAMS, analyse, votes
+from forensics_plugins.dq.detector import analyse, votes
+from forensics_plugins.dq.spec import DEFAULT_PARAMS
 from forensics_plugins.dq.figures import votes_png
 base = hwm_mb()
 t0 = time.perf_counter()

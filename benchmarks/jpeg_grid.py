@@ -30,7 +30,8 @@ OUT = Path(__file__).resolve().parent / "out"
 _CHILD = r"""
 import forensics_core
 from forensics_core.evidence import load_evidence
-from forensics_plugins.jpeg_grid.detector import DEFAULT_PARAMS, analyse
+from forensics_plugins.jpeg_grid.detector import analyse
+from forensics_plugins.jpeg_grid.spec import DEFAULT_PARAMS
 from forensics_plugins.jpeg_grid.figures import map_png, vote_map_png
 base = hwm_mb()
 t0 = time.perf_counter()

@@ -24,7 +24,8 @@ OUT = Path(__file__).resolve().parent / "out"
 _CHILD = r"""
 import forensics_core
 from forensics_core.evidence import load_evidence
-from forensics_plugins.lens_distortion.detector import DEFAULT_PARAMS, analyse
+from forensics_plugins.lens_distortion.detector import analyse
+from forensics_plugins.lens_distortion.spec import DEFAULT_PARAMS
 base = hwm_mb()
 t0 = time.perf_counter()
 ev = load_evidence(sys.argv[1])

@@ -81,7 +81,8 @@ def _lsd_count(luma: np.ndarray, min_length_px: float) -> int | None:
 
 def run_one(item: tuple[str, Path, str]) -> dict:
     from forensics_core.evidence import load_evidence
-    from forensics_plugins.lens_distortion.detector import DEFAULT_PARAMS, analyse
+    from forensics_plugins.lens_distortion.detector import analyse
+    from forensics_plugins.lens_distortion.spec import DEFAULT_PARAMS
 
     name, path, group = item
     luma = load_evidence(path).luma

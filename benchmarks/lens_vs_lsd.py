@@ -44,7 +44,8 @@ def _opencv(cv2, data: bytes, min_length: float) -> int:
 
 def _ours(path: Path) -> tuple[int, tuple[int, int]]:
     from forensics_core.evidence import load_evidence
-    from forensics_plugins.lens_distortion.detector import DEFAULT_PARAMS, analyse
+    from forensics_plugins.lens_distortion.detector import analyse
+    from forensics_plugins.lens_distortion.spec import DEFAULT_PARAMS
 
     luma = load_evidence(path).luma
     return len(analyse(luma, DEFAULT_PARAMS).details["lines"]), luma.shape
@@ -60,7 +61,7 @@ def main() -> None:
     except ImportError:
         print("OpenCV is not installed (pip install opencv-python-headless, or the 'bench' extra): nothing measured")
         return
-    from forensics_plugins.lens_distortion.detector import DEFAULT_PARAMS
+    from forensics_plugins.lens_distortion.spec import DEFAULT_PARAMS
 
     for path in args.photo or [photo((4000, 3000))]:
         data = path.read_bytes()

@@ -128,6 +128,7 @@ def main() -> None:
         runs = [one_run(target, args.format, env) for _ in range(args.runs)]
     from PIL import Image
 
+    Image.MAX_IMAGE_PIXELS = None  # our own photo, only its size is read
     with Image.open(target) as im:
         size = f"{im.width}x{im.height} ({im.width * im.height / 1e6:.0f} MP)"
     print(f"{target.name}: {size}, --format {args.format}, {args.runs} runs in fresh processes")

@@ -30,7 +30,8 @@ OUT = Path(__file__).resolve().parent / "out"
 _CHILD = r"""
 from forensics_core import DetectorFinding, Status
 from forensics_core.evidence import load_evidence
-from forensics_plugins.metadata.detector import DEFAULT_PARAMS, NAME, VERSION, analyse
+from forensics_plugins.metadata.detector import analyse
+from forensics_plugins.metadata.spec import DEFAULT_PARAMS, NAME, VERSION
 from forensics_plugins.metadata.section import report_section
 base = hwm_mb()
 lens = DetectorFinding("lens_distortion", "0.1.0", "lens_distortion", Status.OK, "benchmark", None, None, None,

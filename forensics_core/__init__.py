@@ -7,7 +7,6 @@ from importlib.metadata import PackageNotFoundError, version
 
 import pluggy
 
-from .evidence import Evidence, EvidenceError, load_evidence
 from .findings import (
     DetectorFinding,
     DetectorResult,
@@ -20,7 +19,6 @@ from .findings import (
     VerdictLabel,
 )
 from .hookspecs import PROJECT
-from .synthetic import SyntheticCase
 
 try:
     __version__ = version("forensics")
@@ -33,7 +31,27 @@ hookimpl = pluggy.HookimplMarker(PROJECT)
 ENTRY_POINT_GROUP = "forensics.plugins"
 """Entry-point group under which bundled and third-party plugins are found."""
 
-from .analysis import analyze  # noqa: E402  (needs hookimpl defined first)
+# Names whose modules load numpy and Pillow (or, for `analyze`, the analysis
+# runner, fusion and calibration), imported when first used: a plugin's
+# declarations, `forensics --version` and `forensics plugins` need none of them.
+_LAZY = {
+    "Evidence": "evidence",
+    "EvidenceError": "evidence",
+    "load_evidence": "evidence",
+    "SyntheticCase": "synthetic",
+    "analyze": "analysis",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        from importlib import import_module
+
+        value = getattr(import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "ENTRY_POINT_GROUP",

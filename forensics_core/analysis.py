@@ -20,7 +20,7 @@ from importlib.metadata import PackageNotFoundError, version
 from typing import Any
 
 from . import __version__
-from .evidence import DEFAULT_MAX_PIXELS, Evidence, load_evidence
+from .evidence import Evidence, load_evidence
 from .findings import (
     SCHEMA_VERSION,
     DetectorFinding,
@@ -35,12 +35,11 @@ from .findings import (
     to_jsonable,
 )
 from .containment import can_fork, run_forked, run_threaded
+from .defaults import DEFAULT_MAX_PIXELS, DEFAULT_TIMEOUT_S, ISOLATIONS
 from .evaluation import calibration_file, decide_by_lr, evaluate
 from .fusion import POLICY as DEFAULT_FUSION
 from .plugins import PluginHost, one_line
 
-DEFAULT_TIMEOUT_S = 300.0
-ISOLATIONS = ("process", "inline")
 _ENV_PACKAGES = ("numpy", "scipy", "scikit-image", "pillow", "pluggy", "numba")
 
 
@@ -237,6 +236,7 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
     params = resolve_params(host, options)
     selected = list(options.detectors) if options.detectors is not None else sorted(host.detectors)
     contained = options.timeout_s if options.isolation == "process" else None
+    host.prepare()
     evidence.info.extra_metadata = _extra_metadata(host, evidence, contained)
     done: dict[str, DetectorFinding] = {}
     for name in run_order(host, selected):

@@ -15,39 +15,28 @@ import logging
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 from rich.console import Console
 from rich.markup import escape
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-from rich.table import Table
 
 from . import ENTRY_POINT_GROUP, __version__
-from .analysis import DEFAULT_TIMEOUT_S, ISOLATIONS, Options, resolve_params
-from .evidence import DEFAULT_MAX_PIXELS, EvidenceError
-from .output import ReportError, ReportSettings, examine_photo, expected_files, place_outputs
-from .plugins import PluginHost, one_line
-from .report.render import PAPER_SIZES, ReportOptions
-from .signing import (
-    KEY_TYPES,
-    PASSWORD_ENV,
-    ExaminerKey,
-    SigningError,
-    create_self_signed,
-    default_key,
-    default_key_path,
-    fingerprint,
-    load_key,
-    write_key_files,
-)
-from .home import config_dir
-from .text import visible
-from . import trust as trust_store
-from .trust import TrustError
-from .calibration import CalibrationError
-from .calibration import load as load_calibration
 from .calibration.command import calibrate_command
+from .containment import one_line
+from .defaults import DEFAULT_MAX_PIXELS, DEFAULT_TIMEOUT_S, ISOLATIONS, KEY_TYPES, PAPER_SIZES, PASSWORD_ENV
+from .plugins import PluginHost
+from .text import visible
 from .validation.command import validate_command
+
+if TYPE_CHECKING:
+    from .analysis import Options
+    from .output import ReportSettings
+    from .signing import ExaminerKey
+
+# Modules that load numpy, Pillow, cryptography, Jinja2 or WeasyPrint are
+# imported by the commands that use them, so that `--version`, `--help`,
+# `plugins` and `verify` start in a fraction of a second.
 
 FORMATS = ("json", "html", "pdf")
 REPORT_FORMATS = ("html", "pdf")
@@ -125,6 +114,8 @@ def _signing_key(key_path: Path | None, examiner: str | None, organisation: str 
     The password comes from the environment; without one a key that needs one
     is asked for on the terminal.
     """
+    from .signing import SigningError, default_key, default_key_path, load_key
+
     password = _password_from_env()
 
     def load(pw: bytes | None) -> ExaminerKey:
@@ -194,6 +185,12 @@ def _prepare_run(host: PluginHost, detectors, formats, params, timeout, max_pixe
 
     Raises ``click.BadParameter`` (exit status 2) for wrong usage.
     """
+    from .analysis import Options, resolve_params
+    from .calibration import CalibrationError
+    from .calibration import load as load_calibration
+    from .output import ReportSettings
+    from .report.render import ReportOptions
+
     wanted_formats = _split_list(formats) or []
     bad = sorted(set(wanted_formats) - set(FORMATS))
     if bad:
@@ -258,6 +255,11 @@ def analyze(ctx, photos, out_dir, force, detectors, formats, case_id, examiner, 
     Exits 0 when every photo was analysed, whatever the verdict; 1 when some
     photo could not be taken in or its outputs could not be written.
     """
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from .evidence import EvidenceError
+    from .output import ReportError, examine_photo, expected_files, place_outputs
+
     host: PluginHost = ctx.find_root().command.host
     options, report = _prepare_run(host, detectors, formats, params, timeout, max_pixels, fusion, isolation, case_id,
                                    examiner, exhibit_id, organisation, key_path, paper, tsa_url,
@@ -363,6 +365,8 @@ cli.add_command(calibrate_command)
 @click.pass_context
 def plugins_command(ctx, as_json):
     """List plugins: name, version, distribution, hooks, load status, error."""
+    from rich.table import Table
+
     host: PluginHost = ctx.find_root().command.host
     records = host.plugin_records()
     if as_json:
@@ -411,6 +415,12 @@ def keys_create(name, organisation, out_dir, key_type):
     else one asked for on the terminal (empty: none). A court will want a
     certificate issued by your organisation instead: use it with --key.
     """
+    from . import trust as trust_store
+    from .certificates import fingerprint
+    from .home import config_dir
+    from .signing import SigningError, create_self_signed, write_key_files
+    from .trust import TrustError
+
     password = _password_from_env()
     if password is None and sys.stdin.isatty():
         password = click.prompt("password for the new key (empty: none)", hide_input=True,
@@ -452,9 +462,11 @@ def _echo_trusted(entry) -> None:
 @click.argument("cert", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 def trust_add(cert):
     """Trust the certificate(s) in CERT (PEM or DER): a colleague's, or your organisation's CA."""
+    from . import trust as trust_store
+
     try:
         added = trust_store.add(cert)
-    except TrustError as exc:
+    except trust_store.TrustError as exc:
         _fail_line("keys trust add", str(exc))
         sys.exit(1)
     for entry in added:
@@ -465,6 +477,8 @@ def trust_add(cert):
 @trust_group.command("list")
 def trust_list():
     """List the trusted certificates: SHA-256 fingerprint, subject, validity."""
+    from . import trust as trust_store
+
     entries = trust_store.trusted()
     if not entries:
         click.echo(f"the trust store {trust_store.store_dir()} is empty")
@@ -476,9 +490,11 @@ def trust_list():
 @click.argument("which")
 def trust_remove(which):
     """Stop trusting a certificate, named by its file or its SHA-256 fingerprint (8 hex digits at least)."""
+    from . import trust as trust_store
+
     try:
         removed = trust_store.remove(which)
-    except TrustError as exc:
+    except trust_store.TrustError as exc:
         _fail_line("keys trust remove", str(exc))
         sys.exit(1)
     for entry in removed:

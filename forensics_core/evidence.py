@@ -27,6 +27,7 @@ from PIL import ExifTags, Image, ImageFile, TiffImagePlugin, UnidentifiedImageEr
 from PIL import __version__ as _PILLOW_VERSION
 
 from . import exiftool
+from .defaults import DEFAULT_MAX_PIXELS
 from .text import visible
 from .findings import ContainedImage, EvidenceInfo, ExifSummary, GpsPosition, MetadataTag, RawTag
 
@@ -40,7 +41,6 @@ else:
 # Pillow's plugin names; MPO opens through the JPEG plugin. AVIF is Pillow's
 # own (libavif), HEIF comes from pillow-heif (libheif).
 ALLOWED_FORMATS = ("JPEG", "PNG", "TIFF", "WEBP", "AVIF") + (("HEIF",) if pillow_heif else ())
-DEFAULT_MAX_PIXELS = 150_000_000
 _RAW_VALUE_LIMIT = 512
 
 # Luma weights of ITU-R BT.601, the ones JPEG's YCbCr uses.

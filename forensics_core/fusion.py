@@ -46,8 +46,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 
-from scipy.stats import chi2
-
 from . import hookimpl
 from .findings import Contribution, DetectorFinding, Role, Status, Verdict, VerdictLabel
 
@@ -132,6 +130,8 @@ def bonferroni(findings: Sequence[DetectorFinding], alpha: float = ALPHA) -> Ver
 def fisher_p(p_values: Sequence[float]) -> float:
     """Fisher's combined p-value of independent tests: P(chi2(2m) >= -2 sum ln p)."""
     stat = -2.0 * sum(math.log(max(p, _P_FLOOR)) for p in p_values)
+    from scipy.stats import chi2
+
     return float(chi2.sf(stat, 2 * len(p_values)))
 
 

@@ -54,6 +54,27 @@ def forensics_register_detectors() -> Sequence[DetectorSpec]:
 
 
 @hookspec
+def forensics_prepare() -> None:
+    """Import the code your detectors run, once, before photos are analysed.
+
+    Called once in the main process before the first detector of a run (and
+    once per worker process of a batch). Each ``forensics_analyze`` call runs
+    in a forked child: modules imported here are shared with every child,
+    while a module first imported inside ``forensics_analyze`` is imported
+    again for every photo.
+
+    Keep the plugin module itself light, importing at module level only what
+    ``forensics_register_detectors`` needs (your ``DetectorSpec``), so that
+    ``forensics plugins`` and ``forensics --help`` start in a fraction of a
+    second; import the numerical code here, e.g.
+    ``importlib.import_module(__package__ + ".detector")``. Like the import
+    of your plugin module, this runs in the main process: do nothing here
+    but import. A failure is ignored; the detector then fails in its own
+    child, where it is recorded.
+    """
+
+
+@hookspec
 def forensics_analyze(
     detector: str, evidence: Evidence, params: Mapping[str, Any], prior: Mapping[str, DetectorFinding]
 ) -> DetectorResult | None:

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .analysis import Options, analyze_evidence
+from .atomic import write_atomic
 from .evidence import Evidence, load_evidence
 from .findings import Findings
 from .plugins import PluginHost, one_line
@@ -91,26 +92,6 @@ def expected_files(report: ReportSettings | None) -> set[str]:
         return {FINDINGS_NAME}
     return {FINDINGS_NAME, MANIFEST_NAME} | {HTML_NAME for f in report.formats if f == "html"} | \
         {PDF_NAME for f in report.formats if f == "pdf"}
-
-
-def write_atomic(path: Path, data: bytes) -> Path:
-    """Write ``data`` to a temporary file beside ``path``, then rename it into place.
-
-    A run stopped at any moment leaves either the old file or the new one,
-    never half of one.
-    """
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
 
 
 def write_findings(findings: Findings, folder: Path) -> Path:

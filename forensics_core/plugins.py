@@ -68,6 +68,7 @@ class PluginHost:
         self.detectors: dict[str, RegisteredDetector] = {}
         self.allow = set(allow) if allow is not None else _env_names(ALLOW_ENV)
         self.deny = set(deny) if deny is not None else (_env_names(DENY_ENV) or set())
+        self._prepared: int | None = None
         from . import fusion
 
         self.add(fusion, "core.fusion", distribution="forensics", version=_core_version())
@@ -195,6 +196,14 @@ class PluginHost:
                 yield HookOutcome(impl.plugin_name, error=exc)
             else:
                 yield HookOutcome(impl.plugin_name, value=value)
+
+    def prepare(self) -> None:
+        """Call every ``forensics_prepare`` once for this host in this process (see the hook's documentation)."""
+        if self._prepared == os.getpid():
+            return
+        self._prepared = os.getpid()
+        for _ in self.call_each("forensics_prepare"):
+            pass
 
     def implementation(self, hook_name: str, plugin: str):
         """The function with which ``plugin`` implements ``hook_name``, or None."""

@@ -28,11 +28,11 @@ from cryptography.hazmat.primitives.serialization import pkcs12
 from cryptography.x509.oid import NameOID
 
 from . import trust
+from .atomic import write_atomic
 from .certificates import fingerprint, is_self_signed
+from .defaults import KEY_TYPES
 from .home import config_dir
 
-PASSWORD_ENV = "FORENSICS_KEY_PASSWORD"
-KEY_TYPES = ("ecdsa-p256", "rsa-3072")
 DEFAULT_KEY_NAME = "examiner"
 _VALIDITY_DAYS = 730
 _SIGNATURE_FIELD = "ExaminerCertification"
@@ -142,8 +142,6 @@ def create_self_signed(name: str, organisation: str, key_type: str = "ecdsa-p256
 
 def write_key_files(folder: Path, p12: bytes, cert: x509.Certificate, stem: str = DEFAULT_KEY_NAME) -> tuple[Path, Path]:
     """Write ``stem.p12`` (mode 0600: it holds the private key) and ``stem.pem`` (the certificate)."""
-    from .output import write_atomic
-
     folder.mkdir(parents=True, exist_ok=True)
     p12_path = folder / f"{stem}.p12"
     if p12_path.exists():

@@ -23,6 +23,7 @@ from cryptography import x509
 from cryptography.hazmat.primitives import serialization
 
 from . import certificates
+from .atomic import write_atomic
 from .certificates import fingerprint, is_self_signed
 from .home import config_dir
 
@@ -82,8 +83,6 @@ def read_certificates(path: Path) -> list[x509.Certificate]:
 
 def trust_certificate(cert: x509.Certificate) -> TrustedCertificate:
     """Put ``cert`` into the store; adding a certificate already there changes nothing."""
-    from .output import write_atomic
-
     folder = store_dir()
     target = folder / _file_name(cert)
     try:

@@ -27,7 +27,8 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__
-from ..output import FINDINGS_NAME, write_atomic
+from ..atomic import write_atomic
+from ..output import FINDINGS_NAME
 from .plan import SUMMARY_CSV, SUMMARY_JSON
 
 OUTCOMES = ("analysed", "resumed", "duplicate", "failed", "pending")

@@ -25,7 +25,8 @@ from ..findings import Findings
 from ..output import Placement, ReportError, ReportSettings, examine_photo
 from ..plugins import PluginHost, one_line
 from ..report.render import ReportOptions
-from ..signing import PASSWORD_ENV, ExaminerKey, SigningError, load_key
+from ..defaults import PASSWORD_ENV
+from ..signing import ExaminerKey, SigningError, load_key
 from .plan import Job
 from .resume import start_fresh
 

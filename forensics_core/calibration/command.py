@@ -9,7 +9,7 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from ..output import write_atomic
+from ..atomic import write_atomic
 from .model import CalibrationError
 
 console = Console(stderr=True, highlight=False)

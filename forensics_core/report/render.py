@@ -24,6 +24,7 @@ from typing import Any
 from jinja2 import Environment, FunctionLoader, StrictUndefined
 from markupsafe import Markup
 
+from ..defaults import PAPER_SIZES
 from ..evidence import Evidence
 from ..findings import ExifSummary, Findings
 from ..fusion import LR_POLICY
@@ -35,7 +36,6 @@ from .error_rates import ErrorRates, given_error_rates, shipped_error_rates
 from .plugin_sections import DetectorSection, section_for
 
 TEMPLATES_PACKAGE = "forensics_core.templates"
-PAPER_SIZES = {"a4": "A4", "letter": "letter"}
 NOT_GIVEN = "not given"
 _DETAILS_LIMIT = 3000
 

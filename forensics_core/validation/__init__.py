@@ -3,116 +3,30 @@
 ``forensics validate SUITE --out DIR`` (see :mod:`.command`) writes
 ``validation.json`` (:class:`ValidationRecord`) and ``validation.html``;
 the report's "Known error rates" section reads such a record.
+
+The package's names are imported from their modules when first used, so that
+reading a record (the report does) or registering ``forensics validate``
+loads neither the analysis nor the statistics.
 """
 
-from __future__ import annotations
+from importlib import import_module
 
-import time
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
-from datetime import datetime, timezone
-from pathlib import Path
+from ..defaults import DEFAULT_COUNT, DEFAULT_SEED
 
-from .. import __version__
-from ..analysis import Options, _environment, resolve_params
-from ..fusion import ALPHA
-from ..output import write_atomic
-from ..plugins import PluginHost, one_line
-from ..synthetic import SyntheticCase
-from .cases import Case, Suite, SuiteError, content_hash, folder_suite, read_suite, write_synthetic
-from .dependence import authentic_dependence
-from .null_check import null_checks
-from ..calibration.fit import performance, score_features, supports_hp
-from .record import FORMAT, Dataset, ValidationRecord, case_rows, compute_methods, read_record, shipped_record
-from .runner import CaseResult, default_workers, run_cases
-
-SYNTHETIC = "synthetic"
-DEFAULT_SEED = 2026
-DEFAULT_COUNT = 20
-RECORD_NAME = "validation.json"
-THUMBNAILS = "thumbnails"
+_LAZY = {
+    "Case": "cases", "Suite": "cases", "SuiteError": "cases", "folder_suite": "cases", "read_suite": "cases",
+    "ValidationRecord": "record", "read_record": "record", "shipped_record": "record",
+    "default_workers": "runner",
+    "RECORD_NAME": "run", "SYNTHETIC": "run", "synthetic_suite": "run", "validate": "run",
+}
 
 
-@dataclass(frozen=True)
-class SyntheticProblem:
-    """A plugin whose synthetic cases could not be generated."""
-
-    plugin: str
-    reason: str
-
-
-def synthetic_suite(host: PluginHost, folder: Path, seed: int, count: int,
-                    on_problem: Callable[[SyntheticProblem], None] = lambda p: None) -> Suite:
-    """Generate every plugin's synthetic cases into ``folder``; a plugin that fails is reported and left out."""
-    def generated() -> Iterator[tuple[str, SyntheticCase]]:
-        for outcome in host.call_each("forensics_synthetic_cases", seed=seed, count=count):
-            if outcome.error is not None:
-                on_problem(SyntheticProblem(outcome.plugin, one_line(outcome.error)))
-                continue
-            try:
-                for case in outcome.value or ():
-                    if not isinstance(case, SyntheticCase):
-                        raise TypeError(f"yielded {type(case).__name__}, not SyntheticCase")
-                    yield outcome.plugin, case
-            except Exception as exc:
-                on_problem(SyntheticProblem(outcome.plugin, one_line(exc)))
-
-    cases = write_synthetic(generated(), folder)
-    if not cases:
-        raise SuiteError("no installed plugin generated synthetic cases")
-    return Suite(SYNTHETIC, f"forensics {__version__} synthetic generators", cases, content_hash(cases))
+def __getattr__(name: str):
+    if name in _LAZY:
+        value = getattr(import_module(f"{__name__}.{_LAZY[name]}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def _now() -> str:
-    return datetime.now(timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z")
-
-
-def validate(
-    suite: Suite,
-    out: Path,
-    host: PluginHost,
-    options: Options,
-    workers: int,
-    on_done: Callable[[CaseResult], None] = lambda r: None,
-    seed: int | None = None,
-    count: int | None = None,
-) -> ValidationRecord:
-    """Analyse every case of ``suite``, then write ``validation.json`` and ``validation.html`` into ``out``."""
-    started = time.perf_counter()
-    params = resolve_params(host, options)
-    results = run_cases(suite.cases, host, options, out / "findings", workers, on_done)
-    versions = {n: d.spec.version for n, d in host.detectors.items()}
-    rows = case_rows(results)
-    features = score_features(host)
-    fusion = {"policy": options.fusion, "alpha": ALPHA}
-    record = ValidationRecord(
-        format=FORMAT,
-        created=_now(),
-        tool={"name": "forensics", "version": __version__},
-        environment=_environment(),
-        dataset=Dataset(
-            name=suite.name, source=suite.source, content_sha256=suite.content_sha256, n_cases=len(suite.cases),
-            n_spliced=sum(c.spliced for c in suite.cases), n_authentic=sum(not c.spliced for c in suite.cases),
-            failed_intake=sum(r.error is not None for r in results), seed=seed, count=count,
-        ),
-        fusion=fusion,
-        detector_params=params,
-        methods=compute_methods(results, versions, ALPHA, supports_hp(rows, features)),
-        elapsed_s=round(time.perf_counter() - started, 1),
-        cases=rows,
-        null_checks=null_checks(rows, fusion),
-        dependence=authentic_dependence(rows),
-        likelihood_ratios=performance(rows, features),
-    )
-    write_atomic(out / RECORD_NAME, record.to_json().encode("utf-8"))
-    from .page import write_page  # matplotlib: loaded only when a page is made
-    from .thumbnails import conviction_thumbnails
-
-    write_page(record, out, conviction_thumbnails(record, suite.cases, out / "findings", host, out / THUMBNAILS))
-    return record
-
-
-__all__ = [
-    "Case", "DEFAULT_COUNT", "DEFAULT_SEED", "RECORD_NAME", "SYNTHETIC", "Suite", "SuiteError", "ValidationRecord",
-    "default_workers", "folder_suite", "read_record", "read_suite", "shipped_record", "synthetic_suite", "validate",
-]
+__all__ = ["DEFAULT_COUNT", "DEFAULT_SEED", *sorted(_LAZY)]

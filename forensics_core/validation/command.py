@@ -9,21 +9,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
 
-from ..analysis import DEFAULT_TIMEOUT_S, Options, resolve_params
-from ..plugins import PluginHost
-from . import (
-    DEFAULT_COUNT,
-    DEFAULT_SEED,
-    RECORD_NAME,
-    SYNTHETIC,
-    SuiteError,
-    default_workers,
-    read_suite,
-    synthetic_suite,
-    validate,
-)
-from .page import PAGE_NAME
-from .record import VERDICT
+from ..defaults import DEFAULT_COUNT, DEFAULT_SEED, DEFAULT_TIMEOUT_S
 
 console = Console(stderr=True, highlight=False)
 
@@ -56,7 +42,11 @@ def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, time
     each detector declined, and whether its p-values hold on the authentic
     photos (their empirical CDF and the photos it convicts).
     """
-    host: PluginHost = ctx.find_root().command.host
+    from ..analysis import Options, resolve_params
+    from . import RECORD_NAME, SYNTHETIC, SuiteError, default_workers, read_suite, synthetic_suite, validate
+    from .record import VERDICT
+
+    host = ctx.find_root().command.host
     names = [d.strip() for d in detectors.split(",") if d.strip()] if detectors else None
     options = Options(detectors=names, timeout_s=timeout, fusion=fusion)
     try:
@@ -110,6 +100,8 @@ def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, time
                       f"{op.tpr.value or 0:.2f} / {op.fpr.value or 0:.2f}", f"{declined:.0%}",
                       "—" if convicted is None or not convicted.n else f"{convicted.k}/{convicted.n}")
     Console(highlight=False).print(table)
+    from .page import PAGE_NAME
+
     click.echo(f"{out_dir / RECORD_NAME}\n{out_dir / PAGE_NAME}")
     if failures:
         console.print(f"forensics: {failures} photo(s) could not be analysed; see {RECORD_NAME}", markup=False)

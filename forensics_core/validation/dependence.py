@@ -24,7 +24,6 @@ from itertools import combinations
 from typing import Any
 
 import numpy as np
-from scipy.stats import kendalltau
 
 # Independence is called rejected below this two-sided p-value of Kendall's
 # test, after Bonferroni over the pairs measured.
@@ -85,6 +84,7 @@ def pair_dependence(p_values: Sequence[Mapping[str, float]]) -> list[PairDepende
         if len(both) < MIN_COMMON or np.ptp(x) == 0 or np.ptp(y) == 0:
             measured.append((a, b, len(both), None, None))
             continue
+        from scipy.stats import kendalltau  # scipy.stats takes 0.5 s to import: only when measured
         res = kendalltau(x, y)
         measured.append((a, b, len(both), round(float(res.statistic), 4), float(res.pvalue)))
     n_tested = max(1, sum(m[4] is not None for m in measured))

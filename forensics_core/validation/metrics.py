@@ -15,7 +15,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import beta, rankdata
 
 BOOTSTRAP_SAMPLES = 2000
 BOOTSTRAP_SEED = 20261121
@@ -37,6 +36,7 @@ def roc_auc(pos: np.ndarray, neg: np.ndarray) -> float | None:
     """
     if len(pos) == 0 or len(neg) == 0:
         return None
+    from scipy.stats import rankdata
     ranks = rankdata(np.concatenate([pos, neg]))
     u = ranks[: len(pos)].sum() - len(pos) * (len(pos) + 1) / 2.0
     return float(u / (len(pos) * len(neg)))
@@ -53,6 +53,7 @@ def auc_bootstrap_ci(pos: np.ndarray, neg: np.ndarray, level: float = 0.95) -> t
     rng = np.random.default_rng(BOOTSTRAP_SEED)
     p = pos[rng.integers(len(pos), size=(BOOTSTRAP_SAMPLES, len(pos)))]
     n = neg[rng.integers(len(neg), size=(BOOTSTRAP_SAMPLES, len(neg)))]
+    from scipy.stats import rankdata
     ranks = rankdata(np.concatenate([p, n], axis=1), axis=1)
     u = ranks[:, : len(pos)].sum(axis=1) - len(pos) * (len(pos) + 1) / 2.0
     aucs = u / (len(pos) * len(neg))
@@ -91,6 +92,7 @@ def rate(k: int, n: int) -> Rate:
     k, n = int(k), int(n)
     if n == 0:
         return Rate(k, n, None, None)
+    from scipy.stats import beta
     lo = 0.0 if k == 0 else float(beta.ppf(0.025, k, n - k + 1))
     hi = 1.0 if k == n else float(beta.ppf(0.975, k + 1, n - k))
     return Rate(k, n, k / n, (lo, hi))

@@ -27,7 +27,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.stats import beta, binom
 
 from ..fusion import ALPHA
 from .cases import SET_CONDITION
@@ -89,6 +88,7 @@ def superuniformity_p(p_values: np.ndarray) -> float | None:
     if n == 0:
         return None
     k = np.arange(1, n + 1)
+    from scipy.stats import beta
     return float(min(1.0, n * beta.cdf(p, k, n - k + 1).min()))
 
 
@@ -104,6 +104,7 @@ def pointwise_limit(x: np.ndarray, n: int, level: float = 0.95) -> np.ndarray:
     -------
     ndarray, shape (m,)
     """
+    from scipy.stats import binom
     return binom.ppf(level, n, np.clip(x, 0.0, 1.0)) / max(1, n)
 
 

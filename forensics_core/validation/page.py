@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt  # noqa: E402  (the backend must be chosen first
 import numpy as np  # noqa: E402
 from jinja2 import Environment, FunctionLoader, StrictUndefined  # noqa: E402
 
-from ..output import write_atomic  # noqa: E402
+from ..atomic import write_atomic  # noqa: E402
 from ..report.render import template_text  # noqa: E402
 from .metrics import BOOTSTRAP_SAMPLES, Rate  # noqa: E402
 from .null_check import NULL_LEVELS, authentic_p_values, convictions, ecdf, pointwise_limit  # noqa: E402

@@ -15,7 +15,7 @@ import numpy as np
 from ..analysis import Options, analyze_evidence
 from ..evidence import EvidenceError, load_evidence
 from ..findings import DetectorFinding, Findings, Status, VerdictLabel
-from ..output import write_atomic
+from ..atomic import write_atomic
 from ..plugins import PluginHost, one_line
 from .cases import Case, load_mask
 from .metrics import iou, mcc

@@ -8,7 +8,7 @@ from typing import Any
 from forensics_core import DetectorFinding, Evidence, Status
 from forensics_core.report import Figure, ReportSection
 
-from .detector import REFERENCES
+from .spec import REFERENCES
 from .figures import map_png
 
 _KIND_WORDS = {"diagonal": "green on the other diagonal", "red_blue": "red and blue swapped"}

@@ -17,48 +17,12 @@ from typing import Any
 import cv2
 import numpy as np
 
-from forensics_core import DetectorResult, DetectorSpec, Status
+from forensics_core import DetectorResult, Status
 
 from .identity import identity, residual
 from .keypoints import self_matches, work_image
 from .transforms import Hypothesis, hypotheses
 
-NAME = "copy_move"
-VERSION = "1.0.0"
-REFERENCES = (
-    "I. Amerini, L. Ballan, R. Caldelli, A. Del Bimbo, G. Serra, A SIFT-based forensic method for copy-move attack "
-    "detection and transformation recovery, IEEE Trans. Information Forensics and Security 6(3), 2011, "
-    "pp. 1099-1110.",
-    "D. G. Lowe, Distinctive image features from scale-invariant keypoints, International Journal of Computer "
-    "Vision 60(2), 2004, pp. 91-110.",
-    "M. A. Fischler, R. C. Bolles, Random sample consensus, Communications of the ACM 24(6), 1981, pp. 381-395.",
-    "D. Cozzolino, G. Poggi, L. Verdoliva, Efficient dense-field copy-move forgery detection, IEEE Trans. "
-    "Information Forensics and Security 10(11), 2015, pp. 2284-2297.",
-)
-DEFAULT_PARAMS: dict[str, Any] = {
-    "max_work_pixels": 2_000_000,
-    "max_keypoints": 10_000,
-    "min_keypoints": 50,
-    "g2nn_ratio": 0.5,
-    "min_distance_px": 16,
-    "max_hypotheses": 4,
-    "min_inliers": 5,
-    "ransac_threshold_px": 3.0,
-    "window_px": 16,
-    "identical_window_r": 0.3,
-    "max_points_listed": 200,
-}
-
-SPEC = DetectorSpec(
-    name=NAME,
-    version=VERSION,
-    description="Finds regions copied within the photo (SIFT matches under one similarity transform) and measures "
-                "whether their fine grain is identical, as a copy's is, or only their structure, as in a scene "
-                "that repeats itself.",
-    references=REFERENCES,
-    default_params=DEFAULT_PARAMS,
-    calibrated_on="score",
-)
 
 
 def _full_matrix(h: Hypothesis, scale: float) -> list[list[float]]:

@@ -7,7 +7,7 @@ from importlib.resources import files
 from forensics_core import DetectorFinding, Evidence
 from forensics_core.report import Figure, ReportSection
 
-from .detector import REFERENCES
+from .spec import REFERENCES
 from .figures import overlay_png
 
 

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import importlib
+
 from forensics_core import hookimpl
 
-from .detector import NAME, SPEC, analyse
+from .spec import NAME, SPEC
 
 
 @hookimpl
@@ -13,9 +15,16 @@ def forensics_register_detectors():
 
 
 @hookimpl
+def forensics_prepare():
+    importlib.import_module(f"{__package__}.detector")
+
+
+@hookimpl
 def forensics_analyze(detector, evidence, params):
     if detector != NAME:
         return None
+    from .detector import analyse
+
     return analyse(evidence, params)
 
 

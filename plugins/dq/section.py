@@ -7,7 +7,8 @@ from importlib.resources import files
 from forensics_core import DetectorFinding, Evidence
 from forensics_core.report import Figure, ReportSection
 
-from .detector import REFERENCES, votes
+from .detector import votes
+from .spec import REFERENCES
 from .figures import votes_png
 
 

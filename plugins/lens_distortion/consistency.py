@@ -82,6 +82,7 @@ from scipy.stats import chi2, norm
 from scipy.stats import t as student_t
 
 from .geometry import norm_scale, to_normalised
+from .error_model import BOW_REL, DOF, TAU_K1, TAU_REGION
 from .k1 import LineK1, fit_lines, fit_lines_multistart
 
 __all__ = [
@@ -98,14 +99,6 @@ __all__ = [
     "TAU_REGION",
 ]
 
-#: Model-error sd of every line's k1, normalised units (module docstring, term 3).
-TAU_K1 = 0.0044
-#: RMS bow of a world edge about its best straight line, as a fraction of its length (term 3).
-BOW_REL = 1.6e-4
-#: Degrees of freedom of the Student t of a line's standardised departure (term 5).
-DOF = 1.3
-#: Regional model-error sd shared by the lines of a compact group, k1 units (term 6).
-TAU_REGION = 0.0029
 # Curved objects (bezels, pipes, arches, mouldings) come as bundles of nearly
 # parallel edges that bow together; lines from another lens bend together
 # whatever their direction. A group must hold two lines at least this far

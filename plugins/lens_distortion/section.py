@@ -8,7 +8,7 @@ from typing import Any
 from forensics_core import DetectorFinding, Evidence, Status
 from forensics_core.report import Figure, ReportSection
 
-from .detector import REFERENCES
+from .spec import REFERENCES
 from .figures import k1_plot_svg, line_class, overlay_png
 
 _STATUS_WORDS = {

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Literal
 
-from forensics_core.findings import EvidenceInfo
+from forensics_core import EvidenceInfo
 
 Outcome = Literal["consistent", "suspicious", "not available", "note"]
 APPLICABLE: tuple[Outcome, ...] = ("consistent", "suspicious")

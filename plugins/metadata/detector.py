@@ -22,66 +22,16 @@ import time
 from collections.abc import Mapping
 from typing import Any
 
-from forensics_core import DetectorFinding, DetectorResult, DetectorSpec, Evidence, Status
+from forensics_core import DetectorFinding, DetectorResult, Evidence, Status
 
 from . import lens_check
 from .checks import APPLICABLE, Check, datetimes, dimensions, dimensions_changed, exif_presence, software_tag
 from .exiftool_checks import document_ancestors, embedded_previews, makernote_serial, xmp_dates
 from .quantisation import quantisation_check
+from .spec import LENS_DETECTOR
 from .thumbnail import ThumbnailThresholds, thumbnail_check
 from .xmp import xmp_agents
 
-NAME = "metadata"
-VERSION = "1.2.0"
-
-REFERENCES = (
-    "CIPA DC-008-2019 / JEITA CP-3451E, Exchangeable image file format for digital still cameras: Exif Version 2.32, "
-    "2019 (tags DateTime, DateTimeOriginal, Software, PixelXDimension, IFD1 thumbnail).",
-    "ITU-T Rec. T.81 | ISO/IEC 10918-1, Digital compression and coding of continuous-tone still images, 1992, "
-    "Annex K (example quantisation tables); Independent JPEG Group, libjpeg 6b/9, jcparam.c (quality scaling).",
-    "H. Farid, Digital image ballistics from JPEG quantization, Dartmouth College TR2006-583, 2006.",
-    "E. Kee, M. K. Johnson, H. Farid, Digital image authentication from JPEG headers, IEEE Trans. Information "
-    "Forensics and Security 6(3), 1066-1075, 2011.",
-    "E. Kee, H. Farid, Digital image authentication from thumbnails, Proc. SPIE 7541, Media Forensics and "
-    "Security II, 2010 (thumbnails regenerated or left stale by editing; here the thumbnail's content is compared "
-    "with the image's).",
-    "ISO 16684-1:2019, Extensible metadata platform (XMP) specification, Part 1: Data model, serialization and "
-    "core properties (xmp:CreatorTool, xmpMM:History with stEvt:softwareAgent).",
-    "J. A. Nelder, R. Mead, A simplex method for function minimization, The Computer Journal 7(4), 308-313, 1965 "
-    "(aligning the thumbnail with the part of the image it shows).",
-    "M. Ayer, H. D. Brunk, G. M. Ewing, W. T. Reid, E. Silverman, An empirical distribution function for sampling "
-    "with incomplete information, Ann. Math. Statist. 26(4), 641-647, 1955 (pool-adjacent-violators: the "
-    "thumbnail's monotone tone curve).",
-    "lensfun lens database (lensfun project, bundled with lensfunpy), CC BY-SA 3.0; distortion models poly3, poly5 "
-    "and ptlens as documented in lensfun's lensfun.h.",
-    "H. Dersch, Panorama Tools, radial lens correction with coefficients a, b, c (the ptlens model "
-    "r_d = r_u (a r_u^3 + b r_u^2 + c r_u + 1 - a - b - c)).",
-)
-
-DEFAULT_PARAMS: dict[str, Any] = {
-    "datetime_tolerance_s": 2.0,
-    "own_table_makers": ["canon", "apple", "fujifilm"],
-    "thumbnail_max_bytes": 262144,
-    "thumbnail_max_pixels": 1048576,
-    "thumbnail_aspect_tolerance": 0.03,
-    "thumbnail_min_correlation": 0.95,
-    "thumbnail_blur_px": 1.5,
-    "thumbnail_change_threshold": 0.12,
-    "thumbnail_max_region_fraction": 0.003,
-    "lens_k1_tolerance": 0.02,
-    "lens_alpha": 0.01,
-    "lens_fit_grid": 64,
-}
-
-SPEC = DetectorSpec(
-    name=NAME,
-    version=VERSION,
-    description="Runs the examiner's first metadata checks (EXIF, software, dates, size, thumbnail, JPEG tables, "
-                "lens) and compares the lens the EXIF names with the measured distortion.",
-    references=REFERENCES,
-    default_params=DEFAULT_PARAMS,
-    uses=(lens_check.LENS_DETECTOR,),
-)
 
 
 def thresholds(params: Mapping[str, Any]) -> ThumbnailThresholds:
@@ -152,7 +102,7 @@ def analyse(evidence: Evidence, params: Mapping[str, Any], prior: Mapping[str, D
 
     t = time.perf_counter()
     tol, alpha = float(params["lens_k1_tolerance"]), float(params["lens_alpha"])
-    comparison = lens_check.compare(info, prior.get(lens_check.LENS_DETECTOR), dimensions_changed(info),
+    comparison = lens_check.compare(info, prior.get(LENS_DETECTOR), dimensions_changed(info),
                                     tol, alpha, int(params["lens_fit_grid"]))
     checks.append(lens_check.lens_check(comparison, tol, alpha))
     marks["lens"] = round(time.perf_counter() - t, 4)

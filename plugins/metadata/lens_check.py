@@ -32,14 +32,12 @@ from typing import Any
 
 from scipy import stats
 
-from forensics_core import DetectorFinding, Status
-from forensics_core.findings import EvidenceInfo
+from forensics_core import DetectorFinding, EvidenceInfo, Status
 
 from .checks import Check
 from .conversion import Prediction, predict, unit_scale
 from .lensdb import LensData, lookup
 
-LENS_DETECTOR = "lens_distortion"
 # Digital zoom and crop modes narrow the field of view the crop factor gives;
 # the 35 mm equivalent focal length in EXIF shows them beyond this share.
 _CROP_AGREEMENT = 0.10

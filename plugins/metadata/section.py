@@ -8,7 +8,8 @@ from typing import Any
 from forensics_core import DetectorFinding, Evidence
 from forensics_core.report import Figure, ReportSection
 
-from .detector import DEFAULT_PARAMS, REFERENCES, thresholds
+from .detector import thresholds
+from .spec import DEFAULT_PARAMS, REFERENCES
 from .figures import lens_plot_svg, thumbnail_png
 from .real_rates import corpus_sentence, rate_sentence
 from .thumbnail import ThumbnailError, compare, extract, luma_of

@@ -24,31 +24,15 @@ from typing import Any
 
 import c2pa
 
-from forensics_core import DetectorResult, DetectorSpec, Evidence, Status
+from forensics_core import DetectorResult, Evidence, Status
 
 from .credentials import AI_SOURCE_TYPES, Credentials, read
 
-NAME = "provenance"
-VERSION = "1.0.0"
-REFERENCES = (
-    "Coalition for Content Provenance and Authenticity, C2PA Technical Specification 2.1, 2024.",
-    "Content Authenticity Initiative, c2pa-python (bindings of the c2pa-rs reference implementation).",
-)
-DEFAULT_PARAMS: dict[str, Any] = {"trust_anchors_file": "", "read_sidecar": True, "max_sidecar_bytes": 50_000_000}
 # Actions after which the content is no longer what was captured (C2PA 2.1, 18.4).
 EDITS = ("c2pa.edited", "c2pa.filtered", "c2pa.color_adjustments", "c2pa.cropped", "c2pa.resized",
          "c2pa.drawing", "c2pa.placed", "c2pa.removed", "c2pa.orientation", "c2pa.converted", "c2pa.transcoded",
          "c2pa.repackaged", "c2pa.redacted", "c2pa.edited.metadata")
 
-SPEC = DetectorSpec(
-    name=NAME,
-    version=VERSION,
-    description="Reads and validates C2PA Content Credentials (signatures, the hash binding the manifest to the "
-                "content, the signer, declared actions, ingredients and digital source type).",
-    references=REFERENCES,
-    default_params=DEFAULT_PARAMS,
-    calibrated_on="score",
-)
 
 
 def _sidecar(evidence: Evidence, params: Mapping[str, Any]) -> tuple[bytes | None, str | None]:

@@ -7,7 +7,7 @@ from importlib.resources import files
 from forensics_core import DetectorFinding, Evidence
 from forensics_core.report import ReportSection
 
-from .detector import REFERENCES
+from .spec import REFERENCES
 
 
 def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSection:

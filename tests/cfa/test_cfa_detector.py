@@ -10,7 +10,8 @@ from PIL import Image
 from forensics_core import Status
 from forensics_core.findings import check_result
 from forensics_plugins.cfa import synth
-from forensics_plugins.cfa.detector import DEFAULT_PARAMS, SPEC, analyse, regions_mask
+from forensics_plugins.cfa.detector import analyse, regions_mask
+from forensics_plugins.cfa.spec import DEFAULT_PARAMS, SPEC
 
 
 def _decoded(data: bytes) -> np.ndarray:

@@ -19,7 +19,8 @@ from forensics_plugins.cfa import synth
 from forensics_plugins.cfa.bayer import mosaic
 from forensics_plugins.cfa.content_null import null_rates
 from forensics_plugins.cfa.demosaic import demosaic
-from forensics_plugins.cfa.detector import DEFAULT_PARAMS, analyse, regions_mask
+from forensics_plugins.cfa.detector import analyse, regions_mask
+from forensics_plugins.cfa.spec import DEFAULT_PARAMS
 from forensics_plugins.cfa.regions import Question, scan
 
 

@@ -21,7 +21,8 @@ from PIL import Image
 
 from forensics_core import Status
 from forensics_plugins.cfa import synth
-from forensics_plugins.cfa.detector import DEFAULT_PARAMS, analyse, regions_mask
+from forensics_plugins.cfa.detector import analyse, regions_mask
+from forensics_plugins.cfa.spec import DEFAULT_PARAMS
 
 pytestmark = pytest.mark.slow
 

@@ -7,7 +7,8 @@ import pytest
 from PIL import Image
 
 from forensics_core import Status, analyze, load_evidence
-from forensics_plugins.copy_move.detector import DEFAULT_PARAMS, analyse, regions_mask
+from forensics_plugins.copy_move.detector import analyse, regions_mask
+from forensics_plugins.copy_move.spec import DEFAULT_PARAMS
 from forensics_plugins.copy_move.synth import clone, encode, scene, synthetic_cases
 
 

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from forensics_core import Status, load_evidence
-from forensics_plugins.dq.detector import DEFAULT_PARAMS, analyse, regions_mask
+from forensics_plugins.dq.detector import analyse, regions_mask
+from forensics_plugins.dq.spec import DEFAULT_PARAMS
 from forensics_plugins.dq.synth import decode, encode, paste, scene, synthetic_cases
 
 

@@ -11,7 +11,8 @@ from scipy import ndimage
 from forensics_core import EvidenceError, Status, load_evidence
 from forensics_core.findings import check_result
 from forensics_plugins.jpeg_grid import synth
-from forensics_plugins.jpeg_grid.detector import DEFAULT_PARAMS, analyse, ijg_quality
+from forensics_plugins.jpeg_grid.detector import analyse, ijg_quality
+from forensics_plugins.jpeg_grid.spec import DEFAULT_PARAMS
 from forensics_plugins.jpeg_grid.figures import tiles_mask
 from forensics_plugins.jpeg_grid.luminance import luminance
 

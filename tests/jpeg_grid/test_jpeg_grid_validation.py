@@ -25,7 +25,8 @@ import pytest
 
 from forensics_core import Status, load_evidence
 from forensics_plugins.jpeg_grid import synth
-from forensics_plugins.jpeg_grid.detector import DEFAULT_PARAMS, analyse
+from forensics_plugins.jpeg_grid.detector import analyse
+from forensics_plugins.jpeg_grid.spec import DEFAULT_PARAMS
 from forensics_plugins.jpeg_grid.figures import tiles_mask
 
 pytestmark = pytest.mark.slow

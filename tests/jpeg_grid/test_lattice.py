@@ -9,7 +9,8 @@ from PIL import Image
 from forensics_core import Status, load_evidence
 from forensics_core.findings import check_result
 from forensics_plugins.jpeg_grid import synth
-from forensics_plugins.jpeg_grid.detector import DEFAULT_PARAMS, analyse
+from forensics_plugins.jpeg_grid.detector import analyse
+from forensics_plugins.jpeg_grid.spec import DEFAULT_PARAMS
 from forensics_plugins.jpeg_grid.lattice import block_coefficients, estimate_steps
 from forensics_plugins.jpeg_grid.luminance import luminance
 

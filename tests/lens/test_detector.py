@@ -17,7 +17,8 @@ from PIL import Image
 
 from forensics_core import Status, analyze
 from forensics_plugins.lens_distortion import synth
-from forensics_plugins.lens_distortion.detector import DEFAULT_PARAMS, analyse
+from forensics_plugins.lens_distortion.detector import analyse
+from forensics_plugins.lens_distortion.spec import DEFAULT_PARAMS
 
 VIEWS = ("left01", "left02", "left03", "left04", "left05")
 KINDS = ("copy_move", "other_camera", "other_zoom")

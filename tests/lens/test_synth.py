@@ -8,6 +8,7 @@ import pytest
 from click.testing import CliRunner
 from PIL import Image
 
+from forensics_plugins.lens_distortion.command import synth_command
 from forensics_plugins.lens_distortion.geometry import norm_scale, to_normalised, undistort
 from forensics_plugins.lens_distortion.synth import (
     SPLICE_KINDS,
@@ -17,7 +18,6 @@ from forensics_plugins.lens_distortion.synth import (
     make_splice,
     render_authentic,
     render_scene,
-    synth_command,
     write,
 )
 

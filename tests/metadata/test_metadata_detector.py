@@ -13,7 +13,8 @@ from forensics_core.findings import check_result
 from forensics_core.plugins import PluginHost
 from forensics_core.report.plugin_sections import section_for
 from forensics_plugins.metadata import plugin
-from forensics_plugins.metadata.detector import DEFAULT_PARAMS, NAME, SPEC, analyse
+from forensics_plugins.metadata.detector import analyse
+from forensics_plugins.metadata.spec import DEFAULT_PARAMS, NAME, SPEC
 from metadata_helpers import (
     camera_thumbnail,
     evidence_from,

@@ -5,7 +5,8 @@ import shutil
 import pytest
 
 from forensics_core import exiftool, load_evidence
-from forensics_plugins.metadata.detector import DEFAULT_PARAMS, analyse
+from forensics_plugins.metadata.detector import analyse
+from forensics_plugins.metadata.spec import DEFAULT_PARAMS
 from metadata_helpers import evidence_from, exif_bytes, jpeg, photo
 
 XMP = b"""<?xpacket begin="" id="W5M0MpCehiHzreSzNTczkc9d"?>

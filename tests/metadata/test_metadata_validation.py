@@ -11,11 +11,12 @@ from PIL import Image
 
 from forensics_core import DetectorFinding
 from forensics_core.evidence import load_evidence
-from forensics_plugins.lens_distortion.detector import DEFAULT_PARAMS as LENS_PARAMS
+from forensics_plugins.lens_distortion.spec import DEFAULT_PARAMS as LENS_PARAMS
 from forensics_plugins.lens_distortion.detector import analyse as lens_analyse
 from forensics_plugins.lens_distortion.synth import render_authentic
 from forensics_plugins.metadata.conversion import predict, unit_scale
-from forensics_plugins.metadata.detector import DEFAULT_PARAMS, thresholds
+from forensics_plugins.metadata.detector import thresholds
+from forensics_plugins.metadata.spec import DEFAULT_PARAMS
 from forensics_plugins.metadata.lens_check import compare
 from forensics_plugins.metadata.lensdb import lookup
 from forensics_plugins.metadata.thumbnail import thumbnail_check

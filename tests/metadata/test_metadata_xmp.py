@@ -32,7 +32,8 @@ def test_no_xmp_or_not_an_image():
 
 
 def test_an_editor_in_the_xmp_is_flagged(tmp_path):
-    from forensics_plugins.metadata.detector import DEFAULT_PARAMS, analyse
+    from forensics_plugins.metadata.detector import analyse
+    from forensics_plugins.metadata.spec import DEFAULT_PARAMS
     from metadata_helpers import evidence_from
 
     evidence = evidence_from(jpeg(photo(), exif_bytes(make="Canon", software="Ver.1.00"), xmp=PACKET), tmp_path)

@@ -14,7 +14,8 @@ from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 from PIL import Image
 
 from forensics_core import Status, load_evidence
-from forensics_plugins.provenance.detector import DEFAULT_PARAMS, analyse
+from forensics_plugins.provenance.detector import analyse
+from forensics_plugins.provenance.spec import DEFAULT_PARAMS
 
 CAPTURE = "http://cv.iptc.org/newscodes/digitalsourcetype/digitalCapture"
 GENERATED = "http://cv.iptc.org/newscodes/digitalsourcetype/trainedAlgorithmicMedia"
