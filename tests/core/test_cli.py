@@ -8,7 +8,7 @@ import sys
 
 import numpy as np
 from PIL import Image
-from test_evidence import bad_inputs
+from test_evidence import bad_inputs, png_header_only
 
 FORENSICS = [sys.executable, "-m", "forensics_core"]
 
@@ -158,3 +158,14 @@ def test_one_changed_byte_in_the_exif_header_is_an_observation_and_stops_nothing
     assert findings["evidence"]["exif"]["unreadable"].startswith("EXIF unreadable: not a TIFF file")
     checks = {c["id"]: c for d in findings["detectors"] if d["name"] == "metadata" for c in d["details"]["checks"]}
     assert checks["exif_present"]["outcome"] == "note" and "EXIF unreadable" in checks["exif_present"]["observation"]
+
+
+def test_photos_between_pillows_bomb_warning_and_our_limit_give_one_line_and_no_warning(tmp_path):
+    """108 MP and 144 MP are above Pillow's DecompressionBombWarning level (89 MP) and below --max-pixels."""
+    for name, (w, h) in {"p108.png": (12000, 9000), "p144.png": (13856, 10392)}.items():
+        (tmp_path / name).write_bytes(png_header_only(w, h))
+    out = run("analyze", tmp_path / "p108.png", tmp_path / "p144.png", "--out", tmp_path / "o", "--format", "json")
+    assert out.returncode == 1
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 2 and all(line.startswith("forensics: error: ") for line in lines), out.stderr
+    assert "Warning" not in out.stderr

@@ -8,7 +8,6 @@ import sys
 import zlib
 
 import numpy as np
-import pytest
 from PIL import Image
 
 
