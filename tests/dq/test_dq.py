@@ -79,6 +79,12 @@ def test_a_png_is_skipped_with_the_reason_and_a_jpeg_gets_its_report_section(tmp
         assert text in body, text
     assert [f.key for f in section.figures] == ["votes"] and section.figures[0].used
 
+    once = _evidence(tmp_path, "once.jpg", encode(scene(rng, (640, 480)), 92))
+    (inconclusive,) = analyze_evidence(once, host, Options(detectors=["dq"])).detectors
+    assert inconclusive.status is Status.INCONCLUSIVE
+    plain = section_for(host, inconclusive, once)
+    assert plain.failure is None and "no window was tested" in str(plain.body)
+
     Image.fromarray(np.round(spliced).astype(np.uint8)).save(tmp_path / "spliced.png")
     png = load_evidence(tmp_path / "spliced.png")
     (skipped,) = analyze_evidence(png, host, Options(detectors=["dq"])).detectors
