@@ -82,7 +82,8 @@ def _now() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z")
 
 
-def _environment() -> dict[str, Any]:
+def environment() -> dict[str, Any]:
+    """Python, platform and the versions of the numerical packages, as every findings record states them."""
     packages = {}
     for name in _ENV_PACKAGES:
         try:
@@ -261,7 +262,7 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
             "examiner": options.examiner,
             "calibration": options.calibration,
         },
-        environment=_environment(),
+        environment=environment(),
         plugins=host.plugin_records(),
         detectors=findings,
         verdict=verdict,

@@ -51,7 +51,13 @@ def _child(call: Callable[[], Any], conn, sink: int) -> None:
     sys.stdout = open(1, "w", encoding="utf-8", errors="replace", closefd=False)
     sys.stderr = open(2, "w", encoding="utf-8", errors="replace", closefd=False)
     try:
-        outcome = ("value", call())
+        # One BLAS/OpenMP thread: a detector is one of several processes on
+        # the machine's cores, and OpenBLAS threads spinning against each
+        # other once made the cfa detector 400 times slower on a loaded machine.
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(limits=1):
+            outcome = ("value", call())
     except BaseException as exc:
         outcome = ("error", one_line(exc), traceback.format_exc())
     try:

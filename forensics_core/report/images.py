@@ -19,6 +19,10 @@ from PIL import ExifTags, Image
 from .sections import Figure
 
 MAX_SIDE = 1600
+#: Raster figures up to this many pixels on their longer side (plots, small
+#: maps) stay as given; larger ones (photos with overlays) are embedded as
+#: JPEG, which keeps them readable at print resolution in a tenth of the bytes.
+MAX_LOSSLESS_SIDE = 600
 _JPEG_QUALITY = 85
 # An EXIF thumbnail is at most 64 kB by the standard; anything much larger is not one.
 _MAX_THUMBNAIL_BYTES = 256 * 1024
@@ -54,7 +58,9 @@ def preview(pixels: np.ndarray, max_side: int = MAX_SIDE) -> bytes:
 
 
 def for_report(figure: Figure, max_side: int = MAX_SIDE) -> tuple[bytes, str]:
-    """A plugin's figure as embedded in the report: large rasters reduced, SVG as given.
+    """A plugin's figure as embedded in the report: large rasters as JPEG of at most ``max_side``, SVG as given.
+
+    The figure itself is written beside the report at full resolution.
 
     Raises
     ------
@@ -68,7 +74,7 @@ def for_report(figure: Figure, max_side: int = MAX_SIDE) -> tuple[bytes, str]:
     with warnings.catch_warnings():
         warnings.simplefilter("error", Image.DecompressionBombWarning)
         with Image.open(io.BytesIO(figure.data), formats=["PNG", "JPEG"]) as img:
-            if max(img.size) <= max_side:
+            if max(img.size) <= (max_side if figure.mime == "image/jpeg" else MAX_LOSSLESS_SIDE):
                 img.verify()
                 return figure.data, figure.mime
             img.load()

@@ -10,7 +10,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from .. import __version__
-from ..analysis import Options, _environment, resolve_params
+from ..analysis import Options, environment, resolve_params
 from ..fusion import ALPHA
 from ..atomic import write_atomic
 from ..plugins import PluginHost, one_line
@@ -83,7 +83,7 @@ def validate(
         format=FORMAT,
         created=_now(),
         tool={"name": "forensics", "version": __version__},
-        environment=_environment(),
+        environment=environment(),
         dataset=Dataset(
             name=suite.name, source=suite.source, content_sha256=suite.content_sha256, n_cases=len(suite.cases),
             n_spliced=sum(c.spliced for c in suite.cases), n_authentic=sum(not c.spliced for c in suite.cases),

@@ -15,6 +15,7 @@ import numpy as np
 from ..analysis import Options, analyze_evidence
 from ..evidence import EvidenceError, load_evidence
 from ..findings import DetectorFinding, Findings, Status, VerdictLabel
+from ..fusion import finding_p
 from ..atomic import write_atomic
 from ..plugins import PluginHost, one_line
 from .cases import Case, load_mask
@@ -56,12 +57,6 @@ class CaseResult:
 _HOST: PluginHost | None = None
 
 
-def _p(f: DetectorFinding) -> float | None:
-    if f.p_value is not None:
-        return f.p_value
-    return None if f.nfa is None else min(1.0, f.nfa)
-
-
 def localise_map(host: PluginHost, finding: DetectorFinding, shape: tuple[int, int]) -> np.ndarray | None:
     """The boolean ``shape`` map of the pixels ``finding`` flags, from its plugin's ``forensics_localize``.
 
@@ -98,7 +93,7 @@ def analyse_case(case: Case, options: Options, findings_dir: Path) -> CaseResult
     write_atomic(findings_dir / f"{case.name}.json", findings.to_json().encode("utf-8"))
     truth = load_mask(case.mask, evidence.luma.shape) if case.mask is not None else None
     for f in findings.detectors:
-        outcome = DetectorOutcome(f.status, _p(f), f.score, f.error, f.elapsed_s)
+        outcome = DetectorOutcome(f.status, finding_p(f), f.score, f.error, f.elapsed_s)
         if truth is not None and case.spliced:
             scores = _localise(host, f, truth)
             if scores is not None:
