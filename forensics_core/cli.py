@@ -31,7 +31,7 @@ from .validation.command import validate_command
 
 if TYPE_CHECKING:
     from .analysis import Options
-    from .output import ReportSettings
+    from .pipeline import ReportSettings
     from .signing import ExaminerKey
 
 # Modules that load numpy, Pillow, cryptography, Jinja2 or WeasyPrint are
@@ -188,7 +188,7 @@ def _prepare_run(host: PluginHost, detectors, formats, params, timeout, max_pixe
     from .analysis import Options, resolve_params
     from .calibration import CalibrationError
     from .calibration import load as load_calibration
-    from .output import ReportSettings
+    from .pipeline import ReportSettings
     from .report.render import ReportOptions
 
     wanted_formats = _split_list(formats) or []
@@ -258,7 +258,8 @@ def analyze(ctx, photos, out_dir, force, detectors, formats, case_id, examiner, 
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     from .evidence import EvidenceError
-    from .output import ReportError, examine_photo, expected_files, place_outputs
+    from .output import place_outputs
+    from .pipeline import ReportError, examine_photo, expected_files
 
     host: PluginHost = ctx.find_root().command.host
     options, report = _prepare_run(host, detectors, formats, params, timeout, max_pixels, fusion, isolation, case_id,

@@ -18,6 +18,7 @@ from typing import Any
 
 from .findings import EvidenceInfo, Tool
 
+FINDINGS_NAME = "findings.json"
 MANIFEST_NAME = "manifest.json"
 SIGNATURE_NAME = "manifest.json.p7s"
 SIGNER_CERT_NAME = "signer.pem"

@@ -1,29 +1,13 @@
-"""Where and how outputs are written: per-photo folders, atomic writes, and
-the per-photo unit of work that ``analyze`` and ``batch`` share."""
+"""Where a photo's outputs go: its folder, never one holding another photo's or other settings' outputs."""
 
 from __future__ import annotations
 
-import hashlib
 import json
-import os
-import shutil
-import tempfile
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
-
-from .analysis import Options, analyze_evidence
 from .atomic import write_atomic
-from .evidence import Evidence, load_evidence
 from .findings import Findings
-from .plugins import PluginHost, one_line
-
-if TYPE_CHECKING:
-    from .report.render import ReportOptions
-    from .signing import ExaminerKey
-
-FINDINGS_NAME = "findings.json"
+from .manifest import FINDINGS_NAME
 
 
 @dataclass(frozen=True)
@@ -84,145 +68,5 @@ def place_outputs(out_dir: Path, photo: Path, findings: Findings, files: set[str
     raise OSError(f"no free output folder for {stem} in {out_dir}")
 
 
-def expected_files(report: ReportSettings | None) -> set[str]:
-    """The names a run writes into each photo's folder."""
-    from .manifest import HTML_NAME, MANIFEST_NAME, PDF_NAME
-
-    if report is None:
-        return {FINDINGS_NAME}
-    return {FINDINGS_NAME, MANIFEST_NAME} | {HTML_NAME for f in report.formats if f == "html"} | \
-        {PDF_NAME for f in report.formats if f == "pdf"}
-
-
 def write_findings(findings: Findings, folder: Path) -> Path:
     return write_atomic(folder / FINDINGS_NAME, findings.to_json().encode("utf-8"))
-
-
-class ReportError(Exception):
-    """The report of one photo could not be made; the message is one line."""
-
-
-@dataclass(frozen=True)
-class ReportSettings:
-    """How the signed report of each photo is made.
-
-    Attributes
-    ----------
-    key : ExaminerKey
-        Signs the PDF and the manifest.
-    formats : tuple of {"html", "pdf"}
-    options : ReportOptions
-        Exhibit id and paper size.
-    organisation, tsa_url : str or None
-        Signature block organisation; RFC 3161 time-stamping service.
-    """
-
-    key: ExaminerKey
-    formats: tuple[str, ...]
-    options: ReportOptions
-    organisation: str | None = None
-    tsa_url: str | None = None
-
-
-@dataclass
-class Examined:
-    """One photo analysed and written (or ``kept``: its outputs were already there): findings, folder, refused URLs."""
-
-    findings: Findings
-    folder: Path
-    findings_path: Path
-    refused_urls: list[str] = field(default_factory=list)
-    kept: bool = False
-
-
-def write_report(findings: Findings, evidence: Evidence, folder: Path, host: PluginHost,
-                 report: ReportSettings) -> list[str]:
-    """Write the signed report bundle beside ``findings.json``; return the URLs the PDF renderer refused.
-
-    Raises
-    ------
-    OSError
-        When a file cannot be written (the caller says "cannot write output").
-    ReportError
-        When rendering or signing failed for this photo.
-    """
-    from .report.bundle import write_bundle
-
-    try:
-        result = write_bundle(findings, evidence, folder, report.key, formats=report.formats, host=host,
-                              options=report.options, organisation=report.organisation, tsa_url=report.tsa_url)
-    except OSError:
-        raise
-    except Exception as exc:  # rendering or signing failed for this photo; the others go on
-        if os.environ.get("FORENSICS_DEBUG"):
-            raise
-        raise ReportError(one_line(exc)) from None
-    return list(result.refused_urls)
-
-
-def _changed_since(photo: Path, sha256: str) -> str | None:
-    """Why the file on disk is no longer the hashed evidence, or None when it still is."""
-    digest = hashlib.sha256()
-    try:
-        with photo.open("rb") as fh:
-            for chunk in iter(lambda: fh.read(1 << 20), b""):
-                digest.update(chunk)
-    except OSError as exc:
-        return f"the file could not be read again after the analysis: {exc.strerror or exc}"
-    if digest.hexdigest() != sha256:
-        return (f"the file changed during the analysis (its SHA-256 is now {digest.hexdigest()}): a plugin or another "
-                f"program wrote to it; these findings are of the bytes as first hashed")
-    return None
-
-
-def examine_photo(photo: Path, place: Callable[[Evidence, Findings], Placement], host: PluginHost, options: Options,
-                  report: ReportSettings | None = None) -> Examined:
-    """Take in ``photo``, run the detectors and write ``findings.json`` (and the report) into its folder.
-
-    Parameters
-    ----------
-    photo : Path
-        The evidence file (read, never written).
-    place : callable
-        Gives the :class:`Placement` once the evidence is loaded and analysed
-        (its hash and the findings' parameters may choose it); it may raise
-        to refuse the evidence.
-    host : PluginHost
-    options : Options
-    report : ReportSettings, optional
-        Without it only ``findings.json`` is written.
-
-    Raises
-    ------
-    EvidenceError
-        When the photo cannot be taken in.
-    OSError
-        When an output cannot be written.
-    ReportError
-        When the report cannot be made.
-    """
-    evidence = load_evidence(photo, max_pixels=options.max_pixels)
-    findings = analyze_evidence(evidence, host, options)
-    findings.evidence.changed_during_analysis = _changed_since(photo, evidence.info.sha256)
-    placement = place(evidence, findings)
-    folder = placement.folder
-    if placement.action == "kept":
-        return Examined(findings, folder, folder / FINDINGS_NAME, kept=True)
-    if placement.action == "replace":
-        # The new bundle is made whole beside the old one, then swapped in,
-        # so an interruption leaves one complete bundle, never a mixture.
-        folder = Path(tempfile.mkdtemp(prefix=f".{placement.folder.name}.new-", dir=placement.folder.parent))
-    try:
-        path = write_findings(findings, folder)
-        refused = write_report(findings, evidence, folder, host, report) if report is not None else []
-    except BaseException:
-        if placement.action == "replace":
-            shutil.rmtree(folder, ignore_errors=True)
-        raise
-    if placement.action == "replace":
-        old = Path(tempfile.mkdtemp(prefix=f".{placement.folder.name}.old-", dir=placement.folder.parent))
-        placement.folder.rename(old / "bundle")
-        folder.rename(placement.folder)
-        shutil.rmtree(old, ignore_errors=True)
-        path = placement.folder / FINDINGS_NAME
-    return Examined(findings, placement.folder, path, refused)

@@ -36,8 +36,7 @@ from pathlib import Path
 from asn1crypto import cms
 from asn1crypto import x509 as asn1_x509
 
-from .manifest import MANIFEST_NAME, PDF_NAME, SIGNATURE_NAME, Manifest, sha256_file
-from .output import FINDINGS_NAME
+from .manifest import FINDINGS_NAME, MANIFEST_NAME, PDF_NAME, SIGNATURE_NAME, Manifest, sha256_file
 from .trust import trusted
 
 

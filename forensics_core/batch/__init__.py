@@ -7,7 +7,7 @@ Stages, one module each:
              finished photos and duplicates;
 ``resume``   what counts as finished, leftovers of a killed run, the lock;
 ``work``     what a worker does for one photo (shared with ``analyze``
-             through :func:`forensics_core.output.examine_photo`);
+             through :func:`forensics_core.pipeline.examine_photo`);
 ``local``    local worker processes, a dead worker retried once;
 ``cluster``  the same work as tasks on a Dask distributed cluster;
 ``summary``  ``summary.json`` and ``summary.csv``;

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from ..manifest import HTML_NAME, MANIFEST_NAME, PDF_NAME, SIGNATURE_NAME, sha256_file
-from ..output import FINDINGS_NAME
+from ..manifest import FINDINGS_NAME
 
 LOCK_NAME = ".forensics-batch.lock"
 FOREIGN = "foreign"

@@ -28,7 +28,7 @@ from typing import Any
 
 from .. import __version__
 from ..atomic import write_atomic
-from ..output import FINDINGS_NAME
+from ..manifest import FINDINGS_NAME
 from .plan import SUMMARY_CSV, SUMMARY_JSON
 
 OUTCOMES = ("analysed", "resumed", "duplicate", "failed", "pending")

@@ -22,7 +22,8 @@ from typing import Any
 from ..analysis import Options
 from ..evidence import Evidence, EvidenceError
 from ..findings import Findings
-from ..output import Placement, ReportError, ReportSettings, examine_photo
+from ..output import Placement
+from ..pipeline import ReportError, ReportSettings, examine_photo
 from ..plugins import PluginHost, one_line
 from ..report.render import ReportOptions
 from ..defaults import PASSWORD_ENV

@@ -20,10 +20,9 @@ from cryptography.hazmat.primitives import serialization
 
 from ..evidence import Evidence
 from ..findings import Findings
-from ..manifest import (HTML_NAME, MANIFEST_NAME, PDF_NAME, SIGNATURE_NAME, SIGNER_CERT_NAME, Manifest,
+from ..manifest import (FINDINGS_NAME, HTML_NAME, MANIFEST_NAME, PDF_NAME, SIGNATURE_NAME, SIGNER_CERT_NAME, Manifest,
                         evidence_entry, file_entries)
 from ..atomic import write_atomic
-from ..output import FINDINGS_NAME
 from ..plugins import PluginHost
 from ..signing import UNNAMED_EXAMINER, ExaminerKey, sign_detached, sign_pdf
 from .render import ReportOptions, SignatureInfo, render_html, render_pdf

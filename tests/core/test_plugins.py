@@ -135,7 +135,8 @@ def test_plugins_command_lists_status_and_errors(monkeypatch):
 
 def test_a_plugin_that_writes_to_the_evidence_file_is_caught_and_said_loudly(photo, tmp_path):
     from forensics_core.analysis import Options
-    from forensics_core.output import Placement, examine_photo
+    from forensics_core.output import Placement
+    from forensics_core.pipeline import examine_photo
 
     copy = tmp_path / "copy.jpg"
     copy.write_bytes(Path(photo).read_bytes())
