@@ -5,8 +5,6 @@ Public API for users and plugin authors. Plugins import from here only.
 
 from importlib.metadata import PackageNotFoundError, version
 
-import pluggy
-
 from .findings import (
     DetectorFinding,
     DetectorResult,
@@ -18,15 +16,12 @@ from .findings import (
     Verdict,
     VerdictLabel,
 )
-from .hookspecs import PROJECT
+from .hookspecs import hookimpl
 
 try:
     __version__ = version("forensics")
 except PackageNotFoundError:  # running from a source tree that was never installed
     __version__ = "0+unknown"
-
-hookimpl = pluggy.HookimplMarker(PROJECT)
-"""Decorator for a plugin's hook implementations."""
 
 ENTRY_POINT_GROUP = "forensics.plugins"
 """Entry-point group under which bundled and third-party plugins are found."""

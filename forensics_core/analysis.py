@@ -196,13 +196,22 @@ def _extra_metadata(host: PluginHost, evidence: Evidence, contained_s: float | N
 
 
 def fuse(host: PluginHost, policy: str, findings: Sequence[DetectorFinding], evidence: Evidence) -> Verdict:
-    """The verdict of the first plugin that implements ``policy``."""
+    """The verdict of the first plugin that implements ``policy`` (the hook is ``firstresult``).
+
+    Each implementation is called on its own: one that raises is passed over,
+    since it may not implement ``policy`` at all and must not spoil the
+    verdict of the plugin that does. Only when no plugin gives a verdict are
+    the failures stated, as the reason the verdict is inconclusive.
+    """
+    failures = []
     for outcome in host.call_each("forensics_fuse", policy=policy, findings=findings, evidence=evidence):
         if outcome.error is not None:
-            return Verdict(VerdictLabel.INCONCLUSIVE, None,
-                           f"Fusion policy {policy!r} of plugin {outcome.plugin!r} failed: {one_line(outcome.error)}", policy)
-        if isinstance(outcome.value, Verdict):
+            failures.append(f"plugin {outcome.plugin!r} failed: {one_line(outcome.error)}")
+        elif isinstance(outcome.value, Verdict):
             return outcome.value
+    if failures:
+        return Verdict(VerdictLabel.INCONCLUSIVE, None,
+                       f"No verdict by fusion policy {policy!r}: " + "; ".join(failures) + ".", policy)
     return Verdict(VerdictLabel.INCONCLUSIVE, None, f"No installed plugin implements fusion policy {policy!r}.", policy)
 
 

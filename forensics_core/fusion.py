@@ -46,7 +46,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 
-from . import hookimpl
+from .hookspecs import hookimpl
 from .findings import Contribution, DetectorFinding, Role, Status, Verdict, VerdictLabel
 
 POLICY = "bonferroni"

@@ -34,6 +34,8 @@ if TYPE_CHECKING:
 PROJECT = "forensics"
 
 hookspec = pluggy.HookspecMarker(PROJECT)
+hookimpl = pluggy.HookimplMarker(PROJECT)
+"""Decorator for a plugin's hook implementations (exported as ``forensics_core.hookimpl``)."""
 
 
 @hookspec

@@ -109,11 +109,15 @@ def test_unknown_detector_is_an_error_finding(photo):
     assert finding.status is Status.ERROR and "no loaded plugin provides detector 'nope'" in finding.error
 
 
-def test_a_failing_fusion_plugin_gives_an_inconclusive_verdict(photo):
+def test_a_failing_fusion_plugin_does_not_spoil_another_policys_verdict(photo):
     host = fixture_host("good", "raising_fusion")
+    alone = analyze(photo, host=fixture_host("good")).verdict
     verdict = analyze(photo, host=host).verdict
-    assert verdict.label is VerdictLabel.INCONCLUSIVE
-    assert "fusion broke" in verdict.explanation
+    assert verdict.policy == "bonferroni" and verdict.label is alone.label and "fusion broke" not in verdict.explanation
+    unknown = analyze(photo, host=host, fusion="nobody_has_it").verdict
+    assert unknown.label is VerdictLabel.INCONCLUSIVE
+    assert unknown.explanation == ("No verdict by fusion policy 'nobody_has_it': plugin 'raising_fusion' failed: "
+                                   "RuntimeError: fusion broke.")
 
 
 def test_extra_metadata_hook(photo):
