@@ -94,7 +94,7 @@ def test_the_report_appendix_lists_exiftool_groups(data_dir, tmp_path):
     assert done.returncode == 0, done.stderr
     (report,) = tmp_path.rglob("report.html")
     html = report.read_text(encoding="utf-8")
-    assert "Appendix A. Metadata (ExifTool)" in html and "<h3>Nikon (" in html and "Metadata read by" in html
+    assert "Appendix C. Metadata (ExifTool)" in html and "<h3>Nikon (" in html and "Metadata read by" in html
 
 
 @pytest.mark.skipif(shutil.which("exiftool") is None, reason="needs no ExifTool to be absent")

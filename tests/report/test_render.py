@@ -63,8 +63,9 @@ def test_page_one_is_a_summary_and_every_page_has_case_exhibit_and_page_of(bundl
         assert "Case 2024/117" in text and "Exhibit EX-7" in text
         assert f"page {number} of {len(pages)}" in text
     whole = " ".join(" ".join(pages).split())
-    for heading in ("2. Evidence", "3.1 no_section", "3.2 Sectioned fixture detector", "4. Method and reproducibility",
-                    "5. Known error rates", "6. Examiner and signature", "Appendix A. Metadata (ExifTool)"):
+    for heading in ("2. Evidence", "3. Method and reproducibility", "4. Known error rates", "5. Examiner and signature",
+                    "Appendix A. The detectors' analyses", "A.1 no_section", "A.2 Sectioned fixture detector",
+                    "Appendix B. The detectors' parameters as run", "Appendix C. Metadata (ExifTool)"):
         assert heading in whole, heading
     # The fixture detectors are in no validation record, so no figure may be stated for them.
     if shipped_record() is None:
