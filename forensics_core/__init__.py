@@ -5,6 +5,7 @@ Public API for users and plugin authors. Plugins import from here only.
 
 from importlib.metadata import PackageNotFoundError, version
 
+from .contracts import RADIAL_DISTORTION_KEY, RadialDistortion
 from .findings import (
     DetectorFinding,
     DetectorResult,
@@ -58,6 +59,8 @@ __all__ = [
     "EvidenceInfo",
     "Findings",
     "MetadataTag",
+    "RADIAL_DISTORTION_KEY",
+    "RadialDistortion",
     "Status",
     "SyntheticCase",
     "Verdict",

@@ -91,7 +91,10 @@ def forensics_analyze(
     ``with evidence.decoding():`` so the user's pixel limit applies. ``params`` holds the detector's default
     parameters merged with the user's overrides. ``prior`` maps the names in
     the spec's ``uses`` to their findings in this run, for those that ran
-    (declare the argument only if you need it; it is empty otherwise).
+    (declare the argument only if you need it; it is empty otherwise). Read
+    another detector's details only through a record of
+    :mod:`forensics_core.contracts` (e.g. ``RadialDistortion.from_finding``),
+    and publish such a record with its ``to_details()``.
 
     Return a :class:`forensics_core.DetectorResult`: ``status`` (``ok``,
     ``inconclusive`` with the reason in the summary, or ``skipped``), a

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from forensics_core import DetectorResult, Status
+from forensics_core import RADIAL_DISTORTION_KEY, DetectorResult, RadialDistortion, Status
 
 from .consistency import ConsistencyResult, assess
 from .edges import subpixel_edges
@@ -88,15 +88,12 @@ def _global_model(result: ConsistencyResult) -> dict[str, Any] | None:
     m = result.model
     if m is None:
         return None
-    return {
-        "k1": m.k1, "k1_stderr": m.k1_stderr, "k2": m.k2, "k2_stderr": m.k2_stderr,
-        "cx": m.cx, "cx_stderr": m.cx_stderr, "cy": m.cy, "cy_stderr": m.cy_stderr,
-        "cx_px": m.cx * m.scale_px, "cy_px": m.cy * m.scale_px,
-        "sigma_px": m.sigma_px,
-        "n_lines_explained": m.n_lines_explained,
-        "n_lines_informative": m.n_lines_informative,
-        "units": "normalised: image centre at 0, half the larger side = 1; cx_px, cy_px in pixels from the centre",
-    }
+    return RadialDistortion(
+        k1=m.k1, k1_stderr=m.k1_stderr, k2=m.k2, k2_stderr=m.k2_stderr,
+        cx=m.cx, cx_stderr=m.cx_stderr, cy=m.cy, cy_stderr=m.cy_stderr,
+        cx_px=m.cx * m.scale_px, cy_px=m.cy * m.scale_px, sigma_px=m.sigma_px,
+        n_lines_explained=m.n_lines_explained, n_lines_informative=m.n_lines_informative,
+    ).to_details()
 
 
 def _paper_rules(result: ConsistencyResult) -> dict[str, Any]:
@@ -224,7 +221,7 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
 
     details = {
         "lines": records,
-        "global_model": _global_model(result),
+        RADIAL_DISTORTION_KEY: _global_model(result),
         "p_value": result.p_value if result.informative else None,
         "alpha": result.alpha,
         "test": result.test,

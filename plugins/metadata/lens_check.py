@@ -3,7 +3,7 @@
 lensfun's calibration of the named lens at the EXIF focal length predicts
 the photo's radial distortion (:mod:`.lensdb`, :mod:`.conversion`); the lens
 detector measures it from the photo's straight lines (its global model,
-``details["global_model"]``). With ``d = k1_measured - k1_predicted`` and the
+``details["global_model"]``, read as :class:`forensics_core.RadialDistortion`). With ``d = k1_measured - k1_predicted`` and the
 measured standard error ``se``, the detector reports::
 
     z = d / se
@@ -26,13 +26,12 @@ that is not called.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from scipy import stats
 
-from forensics_core import DetectorFinding, EvidenceInfo, Status
+from forensics_core import DetectorFinding, EvidenceInfo, RadialDistortion, Status
 
 from .checks import Check
 from .conversion import Prediction, predict, unit_scale
@@ -79,14 +78,12 @@ def _measured(finding: DetectorFinding | None) -> tuple[dict[str, float] | None,
     # lines; the comparison uses only a measurement the detector stood by.
     if finding.status is not Status.OK:
         return None, f"the lens detector's status is {finding.status.value}"
-    model = finding.details.get("global_model") if isinstance(finding.details, Mapping) else None
-    if not isinstance(model, Mapping):
+    model = RadialDistortion.from_finding(finding)
+    if model is None:
         return None, "the lens detector found too few straight lines to fit a camera model"
-    values = {k: model.get(k) for k in ("k1", "k1_stderr", "k2", "k2_stderr")}
-    if not isinstance(values["k1"], (int, float)) or not isinstance(values["k1_stderr"], (int, float)) \
-            or not values["k1_stderr"] > 0:
+    if not model.k1_stderr > 0:
         return None, "the lens detector gave no k1 with a standard error"
-    return {k: float(v) for k, v in values.items() if isinstance(v, (int, float))}, None
+    return {"k1": model.k1, "k1_stderr": model.k1_stderr, "k2": model.k2, "k2_stderr": model.k2_stderr}, None
 
 
 def _applies(info: EvidenceInfo, lens: LensData, dims_changed: bool | None) -> str | None:

@@ -41,3 +41,23 @@ def test_numpy_details_are_converted_and_nan_refused():
         except MalformedResult:
             continue
         raise AssertionError(f"accepted {bad}")
+
+
+def test_the_radial_distortion_contract_reads_only_a_complete_record_of_an_ok_finding():
+    from forensics_core import RADIAL_DISTORTION_KEY, DetectorFinding, RadialDistortion, Status
+
+    model = RadialDistortion(k1=0.05, k1_stderr=0.004, k2=0.0, k2_stderr=0.003, cx=0.01, cx_stderr=0.02, cy=0.0,
+                             cy_stderr=0.02, cx_px=12.0, cy_px=0.0, sigma_px=0.3, n_lines_explained=30,
+                             n_lines_informative=31)
+
+    def finding(details, status=Status.OK):
+        return DetectorFinding("lens_distortion", "1", "lens_distortion", status, "s", None, None, None, details, {},
+                               0.1)
+
+    assert RadialDistortion.from_finding(finding({RADIAL_DISTORTION_KEY: model.to_details()})) == model
+    assert RadialDistortion.from_finding(finding({RADIAL_DISTORTION_KEY: model.to_details()},
+                                                 Status.INCONCLUSIVE)) is None
+    partial = {k: v for k, v in model.to_details().items() if k != "k2_stderr"}
+    assert RadialDistortion.from_finding(finding({RADIAL_DISTORTION_KEY: partial})) is None
+    assert RadialDistortion.from_finding(finding({RADIAL_DISTORTION_KEY: {**model.to_details(), "k1": "x"}})) is None
+    assert RadialDistortion.from_finding(None) is None

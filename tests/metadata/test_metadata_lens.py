@@ -4,7 +4,7 @@ import lensfunpy
 import numpy as np
 import pytest
 
-from forensics_core import DetectorFinding, Status
+from forensics_core import RADIAL_DISTORTION_KEY, DetectorFinding, RadialDistortion, Status
 from forensics_plugins.lens_distortion.geometry import undistort
 from forensics_plugins.metadata.conversion import forward, inverse, predict, unit_scale
 from forensics_plugins.metadata.lens_check import compare, lens_check
@@ -136,9 +136,11 @@ def test_agrees_with_lensfuns_own_modifier(camera, lens_text, focal, size, crop_
 
 
 def _lens_finding(k1=None, se=0.005, status=Status.OK):
-    model = None if k1 is None else {"k1": k1, "k1_stderr": se, "k2": 0.0, "k2_stderr": 0.01}
+    model = None if k1 is None else RadialDistortion(
+        k1=k1, k1_stderr=se, k2=0.0, k2_stderr=0.01, cx=0.0, cx_stderr=0.01, cy=0.0, cy_stderr=0.01, cx_px=0.0,
+        cy_px=0.0, sigma_px=0.3, n_lines_explained=20, n_lines_informative=20).to_details()
     return DetectorFinding("lens_distortion", "0.1.0", "lens_distortion", status, "s", None, None, None,
-                           {"global_model": model}, {}, 0.1)
+                           {RADIAL_DISTORTION_KEY: model}, {}, 0.1)
 
 
 def _d70s_info(**extra):

@@ -1,0 +1,85 @@
+"""What one detector's findings publish for another detector to read.
+
+A detector that declares ``uses=("other",)`` receives the other detector's
+finding in ``prior`` (see ``forensics_analyze``). What it may read from that
+finding's ``details`` is fixed here, as a typed record with one reader, so
+that a change on the publishing side is a change of this contract, not a
+silent break of the reading side.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from .findings import DetectorFinding, Status
+
+#: The key under which a finding's ``details`` carry its :class:`RadialDistortion`.
+RADIAL_DISTORTION_KEY = "global_model"
+_UNITS = "normalised: image centre at 0, half the larger side = 1; cx_px, cy_px in pixels from the centre"
+
+
+@dataclass(frozen=True)
+class RadialDistortion:
+    """A camera's radial lens distortion as measured on one photo (division model, Devernay & Faugeras 2001).
+
+    Published by the ``lens_distortion`` detector under
+    ``details["global_model"]``; read by the ``metadata`` detector to compare
+    it with the lens the EXIF names.
+
+    Attributes
+    ----------
+    k1, k2 : float
+        Radial coefficients, in normalised coordinates (image centre 0, half
+        the larger side 1); k1 > 0 is barrel distortion.
+    k1_stderr, k2_stderr : float
+        Their standard errors, model error included.
+    cx, cy, cx_stderr, cy_stderr : float
+        Centre of distortion and its standard errors, normalised.
+    cx_px, cy_px : float
+        The centre in pixels from the image centre.
+    sigma_px : float
+        Median residual of the lines about the model, pixels.
+    n_lines_explained, n_lines_informative : int
+        Lines the model explains, of those informative about k1.
+
+    References
+    ----------
+    .. [1] F. Devernay, O. Faugeras, Straight lines have to be straight,
+       Machine Vision and Applications 13, 2001.
+    """
+
+    k1: float
+    k1_stderr: float
+    k2: float
+    k2_stderr: float
+    cx: float
+    cx_stderr: float
+    cy: float
+    cy_stderr: float
+    cx_px: float
+    cy_px: float
+    sigma_px: float
+    n_lines_explained: int
+    n_lines_informative: int
+
+    def to_details(self) -> dict[str, Any]:
+        """The JSON form stored in the publishing finding's details."""
+        return {**asdict(self), "units": _UNITS}
+
+    @classmethod
+    def from_finding(cls, finding: DetectorFinding | None) -> RadialDistortion | None:
+        """The measurement a finding stood by: None unless its status is ``ok`` and it carries a complete record."""
+        if finding is None or finding.status is not Status.OK or not isinstance(finding.details, Mapping):
+            return None
+        record = finding.details.get(RADIAL_DISTORTION_KEY)
+        if not isinstance(record, Mapping):
+            return None
+        try:
+            values = {name: record[name] for name in cls.__dataclass_fields__}
+        except KeyError:
+            return None
+        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values.values()):
+            return None
+        return cls(**values)
