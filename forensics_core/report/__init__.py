@@ -1,5 +1,6 @@
 """Report building blocks shared by the core and the plugins."""
 
+from .images import display_image
 from .sections import Figure, ReportSection
 
-__all__ = ["Figure", "ReportSection"]
+__all__ = ["Figure", "ReportSection", "display_image"]

@@ -40,21 +40,57 @@ def _jpeg(img: Image.Image) -> bytes:
 
 
 def _to_8bit(pixels: np.ndarray) -> np.ndarray:
-    """The stored grid as uint8 grey or RGB, for display only."""
+    """The stored grid as uint8 grey or RGB, for display only: values scaled by their type's range, NaN as 0."""
     px = pixels
     if px.ndim == 3:
         px = px[..., :3] if px.shape[2] >= 3 else px[..., 0]
     if px.dtype == np.uint8:
         return px
     scale = {"uint16": 65535.0, "int32": 65535.0}.get(px.dtype.name, 1.0)
-    return np.clip(np.asarray(px, dtype=np.float32) / scale * 255.0 + 0.5, 0, 255).astype(np.uint8)
+    values = np.nan_to_num(np.asarray(px, dtype=np.float32), nan=0.0, posinf=scale, neginf=0.0)
+    return np.clip(values / scale * 255.0 + 0.5, 0, 255).astype(np.uint8)
+
+
+def display_image(pixels: np.ndarray, max_side: int, gain: float = 1.0, offset: float = 0.0) -> tuple[Image.Image, float]:
+    """The photo as the background of a figure: RGB, at most ``max_side`` pixels long, and the factor it was reduced by.
+
+    One rule for every figure and the report's preview: 8-bit grids as
+    stored; 16-bit (and 32-bit integer) grids by their type's range, so that
+    a dark 16-bit photo stays dark rather than being stretched to its own
+    maximum; float grids as [0, 1]. Reducing comes first (Pillow's
+    ``reducing_gap`` bins before resampling), so the cost does not grow with
+    the photo's resolution; then each grey level v becomes ``gain * v +
+    offset`` (e.g. 0.6 and 40 dim the photo so coloured marks stand out).
+
+    Parameters
+    ----------
+    pixels : ndarray, shape (H, W) or (H, W, C)
+        The stored grid (``evidence.pixels``).
+    max_side : int
+        Longest side of the result, pixels.
+    gain, offset : float
+        The tone mapping applied after reduction.
+
+    Returns
+    -------
+    image : PIL.Image.Image
+        RGB.
+    factor : float
+        Result size over stored size (1 when not reduced); multiply stored
+        coordinates by it to draw on the image.
+    """
+    img = Image.fromarray(_to_8bit(np.asarray(pixels)))
+    full = max(img.size)
+    img.thumbnail((max_side, max_side), Image.Resampling.LANCZOS, reducing_gap=2.0)
+    rgb = img.convert("RGB")
+    if gain != 1.0 or offset != 0.0:
+        rgb = rgb.point([min(255, max(0, round(v * gain + offset))) for v in range(256)] * 3)
+    return rgb, max(rgb.size) / full
 
 
 def preview(pixels: np.ndarray, max_side: int = MAX_SIDE) -> bytes:
     """A JPEG of the stored grid (orientation not applied), at most ``max_side`` pixels long."""
-    img = Image.fromarray(_to_8bit(pixels))
-    img.thumbnail((max_side, max_side), Image.Resampling.LANCZOS, reducing_gap=2.0)
-    return _jpeg(img)
+    return _jpeg(display_image(pixels, max_side)[0])
 
 
 def for_report(figure: Figure, max_side: int = MAX_SIDE) -> tuple[bytes, str]:

@@ -15,6 +15,8 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 from scipy import ndimage
 
+from forensics_core.report import display_image
+
 MAP_MAX_SIDE = 1200
 
 # RGBA tint of a block by its vote: the image's phase is left clear so the
@@ -32,21 +34,6 @@ _LEGEND = (
     ("red_blue", "red and blue swapped"),
     ("unusable", "no vote (flat or clipped)"),
 )
-
-
-def _reduced(pixels: np.ndarray, max_side: int) -> tuple[Image.Image, float]:
-    """The stored grid as a dimmed RGB image of longest side at most ``max_side``, and its scale factor."""
-    arr = np.asarray(pixels)
-    if arr.dtype != np.uint8:
-        top = float(np.nanmax(arr)) if arr.size else 1.0
-        arr = np.clip(np.nan_to_num(arr.astype(np.float64)) / max(top, 1e-12) * 255.0, 0, 255).astype(np.uint8)
-    if arr.ndim == 3:
-        arr = arr[..., :3] if arr.shape[2] >= 3 else arr[..., 0]
-    img = Image.fromarray(arr)
-    full = max(img.size)
-    img.thumbnail((max_side, max_side), Image.Resampling.LANCZOS, reducing_gap=2.0)
-    dimmed = img.convert("RGB").point([round(v * 0.7 + 30) for v in range(256)] * 3)
-    return dimmed, max(img.size) / full
 
 
 def vote_classes(shift_votes: np.ndarray) -> np.ndarray:
@@ -70,7 +57,7 @@ def map_png(pixels: np.ndarray, details: Mapping[str, Any]) -> bytes:
     bytes
         PNG, the photo's longest side at most :data:`MAP_MAX_SIDE` pixels, with a legend below.
     """
-    img, factor = _reduced(pixels, MAP_MAX_SIDE)
+    img, factor = display_image(pixels, MAP_MAX_SIDE, 0.7, 30)
     block = int(details["block_px"])
     ny, nx = details["grid"]
     size = (max(1, round(nx * block * factor)), max(1, round(ny * block * factor)))

@@ -13,28 +13,12 @@ from typing import Any
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
+from forensics_core.report import display_image
+
 MAP_MAX_SIDE = 1200
 
 MEANINGFUL = (220, 30, 30)
 CANDIDATE = (245, 150, 20)
-
-
-def _display_image(pixels: np.ndarray, max_side: int) -> tuple[Image.Image, float]:
-    """The stored grid reduced to at most ``max_side``, then dimmed, as RGB, with its scale factor.
-
-    Reducing comes first (``reducing_gap`` bins before resampling), so the
-    cost does not grow with the photo's resolution.
-    """
-    arr = np.asarray(pixels)
-    if arr.dtype != np.uint8:
-        arr = (arr.astype(np.float64) / max(float(arr.max(initial=0)), 1.0) * 255.0).astype(np.uint8)
-    if arr.ndim == 3:
-        arr = arr[..., :3] if arr.shape[2] >= 3 else arr[..., 0]
-    img = Image.fromarray(arr)
-    full = max(img.size)
-    img.thumbnail((max_side, max_side), Image.Resampling.LANCZOS, reducing_gap=2.0)
-    dimmed = img.convert("RGB").point([round(v * 0.6 + 40) for v in range(256)] * 3)
-    return dimmed, max(img.size) / full
 
 
 def tiles_mask(runs: list[list[int]], tiles_shape: tuple[int, int]) -> np.ndarray:
@@ -69,7 +53,7 @@ def map_png(pixels: np.ndarray, details: Mapping[str, Any]) -> bytes:
         whose NFA is below the threshold; orange outline: the strongest
         candidates that are not.
     """
-    img, factor = _display_image(pixels, MAP_MAX_SIDE)
+    img, factor = display_image(pixels, MAP_MAX_SIDE, 0.6, 40)
     geometry = details.get("map") or {}
     cell = int(geometry.get("cell_px", 8))
     tiles_shape = tuple(geometry.get("tiles_shape", (0, 0)))

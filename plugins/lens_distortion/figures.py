@@ -11,7 +11,9 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-from PIL import Image, ImageDraw, ImageFont
+from PIL import ImageDraw, ImageFont
+
+from forensics_core.report import display_image
 
 OVERLAY_MAX_SIDE = 1600
 
@@ -35,25 +37,6 @@ def line_class(line: Mapping[str, Any]) -> str:
     return "strong" if abs(z) >= 2.0 else "consistent"
 
 
-def _display_image(pixels: np.ndarray, max_side: int) -> tuple[Image.Image, float]:
-    """The stored grid reduced to at most ``max_side`` and dimmed, as RGB, with its scale factor.
-
-    Reducing comes first (Pillow's ``reducing_gap`` bins before resampling),
-    so the cost does not grow with the photo's full resolution; dimming is a
-    lookup table on the small image so the coloured lines stand out.
-    """
-    arr = np.asarray(pixels)
-    if arr.dtype != np.uint8:
-        arr = (arr.astype(np.float64) / max(float(arr.max()), 1.0) * 255.0).astype(np.uint8)
-    if arr.ndim == 3:
-        arr = arr[..., :3] if arr.shape[2] >= 3 else arr[..., 0]
-    img = Image.fromarray(arr)
-    full = max(img.size)
-    img.thumbnail((max_side, max_side), Image.Resampling.LANCZOS, reducing_gap=2.0)
-    dimmed = img.convert("RGB").point([round(v * 0.6 + 40) for v in range(256)] * 3)
-    return dimmed, max(img.size) / full
-
-
 def overlay_png(pixels: np.ndarray, details: Mapping[str, Any]) -> bytes:
     """The photo with every extracted line drawn, numbered and coloured by its consistency.
 
@@ -69,7 +52,7 @@ def overlay_png(pixels: np.ndarray, details: Mapping[str, Any]) -> bytes:
     bytes
         PNG, longest side at most :data:`OVERLAY_MAX_SIDE` pixels.
     """
-    img, factor = _display_image(pixels, OVERLAY_MAX_SIDE)
+    img, factor = display_image(pixels, OVERLAY_MAX_SIDE, 0.6, 40)
     draw = ImageDraw.Draw(img)
     width = max(2, round(max(img.size) / 400))
     font = ImageFont.load_default(size=max(12, round(max(img.size) / 55)))
