@@ -14,6 +14,7 @@ import json
 import logging
 import os
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -178,9 +179,29 @@ def _run_options(command):
     return command
 
 
-def _prepare_run(host: PluginHost, detectors, formats, params, timeout, max_pixels, fusion, isolation, case_id,
-                 examiner, exhibit_id, organisation, key_path, paper, tsa_url,
-                 validation_path, calibration_path) -> tuple[Options, ReportSettings | None]:
+@dataclass(frozen=True)
+class RunRequest:
+    """What an ``analyze`` or ``batch`` run was asked for: the options of :func:`_run_options`, as given."""
+
+    detectors: str | None
+    formats: str
+    case_id: str | None
+    examiner: str | None
+    params: tuple[str, ...]
+    timeout: float
+    max_pixels: int
+    fusion: str
+    isolation: str
+    exhibit_id: str | None
+    organisation: str | None
+    key_path: Path | None
+    paper: str
+    tsa_url: str | None
+    validation_path: Path | None
+    calibration_path: Path | None
+
+
+def _prepare_run(host: PluginHost, request: RunRequest) -> tuple[Options, ReportSettings | None]:
     """Check the shared options, load the signing key and warn of unknown detectors.
 
     Raises ``click.BadParameter`` (exit status 2) for wrong usage.
@@ -191,22 +212,23 @@ def _prepare_run(host: PluginHost, detectors, formats, params, timeout, max_pixe
     from .pipeline import ReportSettings
     from .report.render import ReportOptions
 
-    wanted_formats = _split_list(formats) or []
+    wanted_formats = _split_list(request.formats) or []
     bad = sorted(set(wanted_formats) - set(FORMATS))
     if bad:
         raise click.BadParameter(f"unknown format(s) {', '.join(bad)}; available: {', '.join(FORMATS)}", param_hint="--format")
     detector_params: dict[str, dict[str, object]] = {}
-    for text in params:
+    for text in request.params:
         det, key, value = _parse_param(text)
         detector_params.setdefault(det, {})[key] = value
-    if calibration_path is not None:
+    if request.calibration_path is not None:
         try:
-            load_calibration(calibration_path)
+            load_calibration(request.calibration_path)
         except CalibrationError as exc:
             raise click.BadParameter(str(exc), param_hint="--calibration") from None
-    options = Options(detectors=_split_list(detectors), timeout_s=timeout, max_pixels=max_pixels, fusion=fusion,
-                      isolation=isolation, detector_params=detector_params, case_id=case_id, examiner=examiner,
-                      calibration=str(calibration_path.resolve()) if calibration_path is not None else None)
+    options = Options(detectors=_split_list(request.detectors), timeout_s=request.timeout,
+                      max_pixels=request.max_pixels, fusion=request.fusion, isolation=request.isolation,
+                      detector_params=detector_params, case_id=request.case_id, examiner=request.examiner,
+                      calibration=str(request.calibration_path.resolve()) if request.calibration_path else None)
     try:
         resolve_params(host, options)
     except ValueError as exc:
@@ -215,17 +237,17 @@ def _prepare_run(host: PluginHost, detectors, formats, params, timeout, max_pixe
     report = None
     if report_formats:
         record = None
-        if validation_path is not None:
+        if request.validation_path is not None:
             from .validation import read_record
 
             try:
-                record = read_record(validation_path)
+                record = read_record(request.validation_path)
             except (OSError, ValueError) as exc:
                 raise click.BadParameter(one_line(exc), param_hint="--validation") from None
-        report = ReportSettings(_signing_key(key_path, examiner, organisation), report_formats,
-                                ReportOptions(exhibit_id=exhibit_id, paper=paper, validation=record,
-                                              validation_source=f"the validation record {validation_path}" if record else None),
-                                organisation, tsa_url)
+        report = ReportSettings(_signing_key(request.key_path, request.examiner, request.organisation), report_formats,
+                                ReportOptions(exhibit_id=request.exhibit_id, paper=request.paper, validation=record,
+                                              validation_source=f"the validation record {request.validation_path}" if record else None),
+                                request.organisation, request.tsa_url)
     for name in options.detectors or []:
         if name not in host.detectors:
             _fail_line(f"detector {name}", "not available; it is recorded as an error in the findings "
@@ -241,8 +263,7 @@ def _prepare_run(host: PluginHost, detectors, formats, params, timeout, max_pixe
 @click.option("--force", is_flag=True, help="Replace, as a whole, a bundle this photo already has in OUT.")
 @_run_options
 @click.pass_context
-def analyze(ctx, photos, out_dir, force, detectors, formats, case_id, examiner, params, timeout, max_pixels, fusion,
-            isolation, exhibit_id, organisation, key_path, paper, tsa_url, validation_path, calibration_path):
+def analyze(ctx, photos, out_dir, force, **run):
     """Analyse PHOTO... and write OUT/<photo stem>/findings.json for each,
     with the signed report (report.html, report.pdf, manifest.json and its
     signature) beside it.
@@ -262,9 +283,7 @@ def analyze(ctx, photos, out_dir, force, detectors, formats, case_id, examiner, 
     from .pipeline import ReportError, examine_photo, expected_files
 
     host: PluginHost = ctx.find_root().command.host
-    options, report = _prepare_run(host, detectors, formats, params, timeout, max_pixels, fusion, isolation, case_id,
-                                   examiner, exhibit_id, organisation, key_path, paper, tsa_url,
-                                   validation_path, calibration_path)
+    options, report = _prepare_run(host, RunRequest(**run))
 
     failures = 0
     used: set[str] = set()
@@ -321,9 +340,7 @@ def analyze(ctx, photos, out_dir, force, detectors, formats, case_id, examiner, 
 @click.option("--force", is_flag=True, help="Analyse again photos whose outputs are already finished.")
 @_run_options
 @click.pass_context
-def batch_command(ctx, inputs, out_dir, workers, scheduler, recursive, force, detectors, formats, case_id, examiner,
-                  params, timeout, max_pixels, fusion, isolation, exhibit_id, organisation, key_path, paper, tsa_url,
-                  validation_path, calibration_path):
+def batch_command(ctx, inputs, out_dir, workers, scheduler, recursive, force, **run):
     """Analyse every photo under INPUT... (files and folders) as `analyze`
     does, on local worker processes or a Dask cluster, with a progress bar and
     OUT/summary.csv and OUT/summary.json at the end.
@@ -338,9 +355,7 @@ def batch_command(ctx, inputs, out_dir, workers, scheduler, recursive, force, de
     if workers is not None and scheduler is not None:
         raise click.BadParameter("local workers and --scheduler exclude each other", param_hint="--workers")
     host: PluginHost = ctx.find_root().command.host
-    options, report = _prepare_run(host, detectors, formats, params, timeout, max_pixels, fusion, isolation, case_id,
-                                   examiner, exhibit_id, organisation, key_path, paper, tsa_url,
-                                   validation_path, calibration_path)
+    options, report = _prepare_run(host, RunRequest(**run))
     settings = Settings(options)
     if report is not None:
         settings = Settings(options, report.formats, report.options, report.organisation, report.tsa_url,
