@@ -1,6 +1,6 @@
 """Peak memory of ``forensics analyze`` on a very large photo, the whole process tree counted once.
 
-Usage: ``python benchmarks/memory.py [--runs 3] [--mp 100] [--format json] [--photo FILE]``
+Usage: ``python benchmarks/memory.py [--runs 3] [--mp 100] [--format json] [--photo FILE] [--baseline TREE]``
 
 Without ``--photo``, a synthetic authentic JPEG of ``--mp`` megapixels (4:3,
 quality 90: a photo of a building from the lens plugin's scene model, scaled
@@ -11,7 +11,9 @@ the command and of every process below it: detectors run in forked children
 that share the parent's pages copy-on-write, so adding their RSS would count
 the decoded photo twice, while PSS counts each page once. Printed: the median
 and range over the runs of the tree's peak PSS, of the command's own peak RSS
-(``VmHWM``), and of the wall time. Target (issue 16): at most 2.5 GB at 100 MP.
+(``VmHWM``), and of the wall time. Targets: at most 2.5 GB at 100 MP (issue
+16), 1 GB at 12 MP (issue 17). ``--baseline`` names another source tree of
+this project, measured in the same run as ``benchmarks/startup.py`` does.
 """
 
 from __future__ import annotations
@@ -102,7 +104,9 @@ def one_run(target: Path, fmt: str, env: dict[str, str]) -> dict[str, float]:
     with tempfile.TemporaryDirectory() as out:
         t0 = time.perf_counter()
         proc = subprocess.Popen([sys.executable, "-m", "forensics_core", "analyze", str(target), "--out", out,
-                                 "--format", fmt], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+                                 "--format", fmt], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                # Not this tree's folder: `python -m` would import its forensics_core first.
+                                cwd=env["FORENSICS_HOME"])
         peak_tree = peak_main = 0
         while proc.poll() is None:
             peak_tree = max(peak_tree, sum(_pss_kb(p) for p in _tree(proc.pid)))
@@ -121,22 +125,28 @@ def main() -> None:
     parser.add_argument("--mp", type=float, default=100.0, help="Megapixels of the synthetic photo.")
     parser.add_argument("--format", default="json", help="analyze's --format (default json).")
     parser.add_argument("--photo", type=Path, help="Measure this photo instead of the synthetic one.")
+    parser.add_argument("--baseline", type=Path, help="Source tree of the version to compare with.")
     args = parser.parse_args()
     target = args.photo or photo(args.mp)
-    with tempfile.TemporaryDirectory() as home:
-        env = {**os.environ, "FORENSICS_HOME": home}
-        runs = [one_run(target, args.format, env) for _ in range(args.runs)]
     from PIL import Image
 
     Image.MAX_IMAGE_PIXELS = None  # our own photo, only its size is read
     with Image.open(target) as im:
         size = f"{im.width}x{im.height} ({im.width * im.height / 1e6:.0f} MP)"
     print(f"{target.name}: {size}, --format {args.format}, {args.runs} runs in fresh processes")
-    print(f"{'':<30}{'median':>9}{'min':>9}{'max':>9}")
-    for key, label in (("tree_mb", "peak PSS, process tree MB"), ("main_mb", "peak RSS, command MB"),
-                       ("wall_s", "wall time s")):
-        v = [r[key] for r in runs]
-        print(f"{label:<30}{statistics.median(v):>9.0f}{min(v):>9.0f}{max(v):>9.0f}")
+    print(f"{'':<40}{'median':>9}{'min':>9}{'max':>9}")
+    trees = [("", None)] + ([("baseline: ", args.baseline.resolve())] if args.baseline else [])
+    for prefix, tree in trees:
+        with tempfile.TemporaryDirectory() as home:
+            env = {**os.environ, "FORENSICS_HOME": home}
+            if tree is not None:
+                (Path(home) / "forensics_plugins").symlink_to(tree / "plugins")
+                env["PYTHONPATH"] = os.pathsep.join([str(tree), home])
+            runs = [one_run(target, args.format, env) for _ in range(args.runs)]
+        for key, label in (("tree_mb", "peak PSS, process tree MB"), ("main_mb", "peak RSS, command MB"),
+                           ("wall_s", "wall time s")):
+            v = [r[key] for r in runs]
+            print(f"{prefix + label:<40}{statistics.median(v):>9.0f}{min(v):>9.0f}{max(v):>9.0f}")
 
 
 if __name__ == "__main__":
