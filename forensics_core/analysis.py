@@ -313,6 +313,13 @@ def analyze(
         When the file cannot be taken in.
     ValueError
         For unknown parameters.
+
+    Examples
+    --------
+    >>> import forensics_core
+    >>> findings = forensics_core.analyze("tests/data/calibration/left01.jpg", ["lens_distortion"])
+    >>> findings.detectors[0].name, findings.verdict.label.value
+    ('lens_distortion', 'consistent')
     """
     host = host or PluginHost.from_entry_points()
     evidence = load_evidence(path, max_pixels=max_pixels)

@@ -48,6 +48,15 @@ class RadialDistortion:
     ----------
     .. [1] F. Devernay, O. Faugeras, Straight lines have to be straight,
        Machine Vision and Applications 13, 2001.
+
+    Examples
+    --------
+    A detector that ``uses=("lens_distortion",)`` reads it from ``prior``:
+
+    >>> def forensics_analyze(detector, evidence, params, prior):
+    ...     lens = RadialDistortion.from_finding(prior.get("lens_distortion"))
+    ...     if lens is None:
+    ...         ...  # say what could not be compared
     """
 
     k1: float

@@ -433,6 +433,13 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
         With a one-line reason: missing path, a directory, an empty file,
         bytes that are no image, an unsupported format, a truncated or corrupt
         image, or too many pixels.
+
+    Examples
+    --------
+    >>> from forensics_core import load_evidence
+    >>> evidence = load_evidence("tests/data/calibration/left01.jpg")
+    >>> evidence.info.format, evidence.pixels.shape, evidence.info.sha256[:12]
+    ('JPEG', (480, 640), '9621899098ad')
     """
     p = Path(path)
     if not p.exists():

@@ -282,6 +282,14 @@ def verify_bundle(folder: Path, evidence: Path | None = None, trust: Path | Sequ
     ------
     ValueError
         When a ``trust`` certificate cannot be read (a usage error, not a failed check).
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> result = verify_bundle(Path("out/left01"), evidence=Path("left01.jpg"),
+    ...                        trust=Path("colleague.pem"))  # doctest: +SKIP
+    >>> result.ok, [str(p) for p in result.problems]  # doctest: +SKIP
+    (True, [])
     """
     result = Verification()
     anchors = _anchors([trust] if isinstance(trust, Path) else list(trust))

@@ -78,6 +78,13 @@ def display_image(pixels: np.ndarray, max_side: int, gain: float = 1.0, offset: 
     factor : float
         Result size over stored size (1 when not reduced); multiply stored
         coordinates by it to draw on the image.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> img, factor = display_image(np.full((300, 400), 1000, np.uint16), 200, gain=0.6, offset=40)
+    >>> img.size, factor, img.getpixel((0, 0))
+    ((200, 150), 0.5, (42, 42, 42))
     """
     img = Image.fromarray(_to_8bit(np.asarray(pixels)))
     full = max(img.size)
