@@ -19,9 +19,9 @@ import numpy as np
 
 from forensics_core import DetectorResult, Status
 
-from .identity import identity, residual
+from .identity import Identity, identity, residual, target_region
 from .keypoints import self_matches, work_image
-from .transforms import Hypothesis, hypotheses
+from .transforms import Hypothesis, hypotheses, refine
 
 
 
@@ -32,7 +32,21 @@ def _full_matrix(h: Hypothesis, scale: float) -> list[list[float]]:
     return np.round(m, 6).tolist()
 
 
-def _record(i: int, h: Hypothesis, found: Any, scale: float, params: Mapping[str, Any]) -> dict[str, Any]:
+def _aligned(gray: np.ndarray, grain: np.ndarray, h: Hypothesis,
+             params: Mapping[str, Any]) -> tuple[Hypothesis, Identity | None, str]:
+    """The hypothesis at the alignment (keypoints' or refined on intensities) where the grain agrees best."""
+    window, offset = int(params["window_px"]), float(params["min_distance_px"])
+    best, found, how = h, identity(gray, grain, h, window, offset), "keypoints"
+    refined = refine(gray, h, target_region(h, gray.shape, 0), float(params["refine_max_shift_px"]))
+    if refined is not None:
+        again = identity(gray, grain, refined, window, offset)
+        if again is not None and (found is None or again.median > found.median):
+            best, found, how = refined, again, "intensities (ECC)"
+    return best, found, how
+
+
+def _record(i: int, h: Hypothesis, found: Identity | None, aligned: str, scale: float,
+            params: Mapping[str, Any]) -> dict[str, Any]:
     limit = int(params["max_points_listed"])
     windows = []
     if found is not None:
@@ -48,6 +62,7 @@ def _record(i: int, h: Hypothesis, found: Any, scale: float, params: Mapping[str
         "rotation_deg": round(h.rotation_deg, 2),
         "translation_px": [round(full[0][2], 1), round(full[1][2], 1)],
         "matrix_px": full,
+        "aligned_on": aligned,
         "identity": None if found is None else round(found.median, 4),
         "n_windows": 0 if found is None else int(len(found.windows)),
         "identical_windows_px": windows,
@@ -105,8 +120,7 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     marks["transforms"] = round(time.perf_counter() - t, 4)
     t = time.perf_counter()
     grain = residual(gray) if found else None
-    records = [_record(i + 1, h, identity(gray, grain, h, int(params["window_px"]), float(params["min_distance_px"])),
-                       scale, params) for i, h in enumerate(found)]
+    records = [_record(i + 1, *_aligned(gray, grain, h, params), scale, params) for i, h in enumerate(found)]
     marks["identity"] = round(time.perf_counter() - t, 4)
     compared = [r for r in records if r["identity"] is not None]
     best = max(compared, key=lambda r: r["identity"]) if compared else None

@@ -109,23 +109,37 @@ def identity(gray: np.ndarray, grain: np.ndarray, hypothesis: Hypothesis, window
         None when fewer than four windows hold grain on both sides.
     """
     h, w = gray.shape
-    warped = cv2.warpAffine(gray, hypothesis.matrix, (w, h), flags=cv2.INTER_LINEAR,
+    region = target_region(hypothesis, (h, w), window)
+    ys, xs = np.nonzero(region)
+    if len(xs) == 0:
+        return None
+    # Only the target region's box (on the window grid, with a margin for the
+    # median filter and the erosion) is warped and compared, so the cost
+    # follows the region's size, not the photo's.
+    margin = 4
+    x0 = max(0, (int(xs.min()) - margin) // window * window)
+    y0 = max(0, (int(ys.min()) - margin) // window * window)
+    x1, y1 = min(w, int(xs.max()) + 1 + margin), min(h, int(ys.max()) + 1 + margin)
+    shifted = hypothesis.matrix.copy()
+    shifted[:, 2] -= (x0, y0)
+    warped = cv2.warpAffine(gray, shifted, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR,
                             borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
-    inside = ndimage.binary_erosion(np.isfinite(warped), iterations=2)
+    inside = ndimage.binary_erosion(np.isfinite(warped), iterations=2, border_value=1)
     moved = residual(np.nan_to_num(warped))
     back = cv2.invertAffineTransform(hypothesis.matrix)
-    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    yy, xx = np.mgrid[y0:y1, x0:x1].astype(np.float32)
     sx = back[0, 0] * xx + back[0, 1] * yy + back[0, 2]
     sy = back[1, 0] * xx + back[1, 1] * yy + back[1, 2]
-    usable = target_region(hypothesis, (h, w), window) & inside & (np.hypot(sx - xx, sy - yy) >= min_offset_px)
-    nh, nw = h // window, w // window
+    usable = region[y0:y1, x0:x1] & inside & (np.hypot(sx - xx, sy - yy) >= min_offset_px)
+    own = grain[y0:y1, x0:x1]
+    nh, nw = (y1 - y0) // window, (x1 - x0) // window
 
     def tiles(a: np.ndarray) -> np.ndarray:
         return a[: nh * window, : nw * window].reshape(nh, window, nw, window).swapaxes(1, 2).reshape(
             nh, nw, window * window)
 
     full = tiles(usable).all(axis=-1)
-    a = tiles(grain)[full].astype(np.float64)
+    a = tiles(own)[full].astype(np.float64)
     b = tiles(moved)[full].astype(np.float64)
     a -= a.mean(axis=1, keepdims=True)
     b -= b.mean(axis=1, keepdims=True)
@@ -135,5 +149,5 @@ def identity(gray: np.ndarray, grain: np.ndarray, hypothesis: Hypothesis, window
     a, b = a[grainy], b[grainy]
     r = np.einsum("ij,ij->i", a, b) / np.sqrt(np.einsum("ij,ij->i", a, a) * np.einsum("ij,ij->i", b, b))
     rows, cols = np.nonzero(full)
-    corners = np.column_stack((cols[grainy] * window, rows[grainy] * window, r))
+    corners = np.column_stack((x0 + cols[grainy] * window, y0 + rows[grainy] * window, r))
     return Identity(float(np.median(r)), corners, window)

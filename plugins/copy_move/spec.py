@@ -11,7 +11,7 @@ from typing import Any
 from forensics_core import DetectorSpec
 
 NAME = "copy_move"
-VERSION = "1.0.0"
+VERSION = "1.1.0"
 REFERENCES = (
     "I. Amerini, L. Ballan, R. Caldelli, A. Del Bimbo, G. Serra, A SIFT-based forensic method for copy-move attack "
     "detection and transformation recovery, IEEE Trans. Information Forensics and Security 6(3), 2011, "
@@ -31,6 +31,7 @@ DEFAULT_PARAMS: dict[str, Any] = {
     "max_hypotheses": 4,
     "min_inliers": 5,
     "ransac_threshold_px": 3.0,
+    "refine_max_shift_px": 4.0,
     "window_px": 16,
     "identical_window_r": 0.3,
     "max_points_listed": 200,
