@@ -21,6 +21,8 @@ REFERENCES = (
     "M. A. Fischler, R. C. Bolles, Random sample consensus, Communications of the ACM 24(6), 1981, pp. 381-395.",
     "D. Cozzolino, G. Poggi, L. Verdoliva, Efficient dense-field copy-move forgery detection, IEEE Trans. "
     "Information Forensics and Security 10(11), 2015, pp. 2284-2297.",
+    "G. D. Evangelidis, E. Z. Psarakis, Parametric image alignment using enhanced correlation coefficient "
+    "maximization, IEEE Trans. Pattern Analysis and Machine Intelligence 30(10), 2008, pp. 1858-1865.",
 )
 DEFAULT_PARAMS: dict[str, Any] = {
     "max_work_pixels": 2_000_000,
