@@ -469,9 +469,22 @@ def trust_group() -> None:
     """
 
 
-def _echo_trusted(entry) -> None:
+def _echo_trusted(entry, prefix: str = "") -> None:
     kind = "self-signed" if entry.self_signed else "issued"
-    click.echo(f"{entry.fingerprint}  {visible(entry.subject)}  ({kind}, valid to {entry.not_after})")
+    click.echo(f"{prefix}{entry.fingerprint}  {visible(entry.subject)}  ({kind}, valid to {entry.not_after})")
+
+
+def _change_trust(command: str, done: str, change) -> None:
+    """Run one change of the trust store; its certificates are echoed, a failure is one line and exit 1."""
+    from .trust import TrustError
+
+    try:
+        entries = change()
+    except TrustError as exc:
+        _fail_line(command, str(exc))
+        sys.exit(1)
+    for entry in entries:
+        _echo_trusted(entry, f"{done}: ")
 
 
 @trust_group.command("add")
@@ -480,14 +493,7 @@ def trust_add(cert):
     """Trust the certificate(s) in CERT (PEM or DER): a colleague's, or your organisation's CA."""
     from . import trust as trust_store
 
-    try:
-        added = trust_store.add(cert)
-    except trust_store.TrustError as exc:
-        _fail_line("keys trust add", str(exc))
-        sys.exit(1)
-    for entry in added:
-        click.echo("trusted: ", nl=False)
-        _echo_trusted(entry)
+    _change_trust("keys trust add", "trusted", lambda: trust_store.add(cert))
 
 
 @trust_group.command("list")
@@ -508,14 +514,7 @@ def trust_remove(which):
     """Stop trusting a certificate, named by its file or its SHA-256 fingerprint (8 hex digits at least)."""
     from . import trust as trust_store
 
-    try:
-        removed = trust_store.remove(which)
-    except trust_store.TrustError as exc:
-        _fail_line("keys trust remove", str(exc))
-        sys.exit(1)
-    for entry in removed:
-        click.echo("removed: ", nl=False)
-        _echo_trusted(entry)
+    _change_trust("keys trust remove", "removed", lambda: trust_store.remove(which))
 
 
 @cli.command("verify")

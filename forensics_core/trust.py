@@ -111,14 +111,6 @@ def trusted() -> list[TrustedCertificate]:
     return sorted(found, key=lambda t: (t.subject, t.fingerprint))
 
 
-def trusted_certificates() -> list[x509.Certificate]:
-    """The store's certificates themselves, as trust anchors."""
-    certs = []
-    for entry in trusted():
-        certs.extend(read_certificates(entry.path))
-    return certs
-
-
 def _normalise(text: str) -> str:
     return "".join(ch for ch in text.upper() if ch in "0123456789ABCDEF")
 
