@@ -31,6 +31,7 @@ ENTRY_POINT_GROUP = "forensics.plugins"
 # runner, fusion and calibration), imported when first used: a plugin's
 # declarations, `forensics --version` and `forensics plugins` need none of them.
 _LAZY = {
+    "EmbeddedThumbnail": "thumbnail",
     "Evidence": "evidence",
     "EvidenceError": "evidence",
     "load_evidence": "evidence",
@@ -54,6 +55,7 @@ __all__ = [
     "DetectorFinding",
     "DetectorResult",
     "DetectorSpec",
+    "EmbeddedThumbnail",
     "Evidence",
     "EvidenceError",
     "EvidenceInfo",

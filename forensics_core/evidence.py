@@ -30,6 +30,8 @@ from . import exiftool
 from .defaults import DEFAULT_MAX_PIXELS
 from .text import visible
 from .findings import ContainedImage, EvidenceInfo, ExifSummary, GpsPosition, MetadataTag, RawTag
+from .thumbnail import MAX_PIXELS as _THUMBNAIL_MAX_PIXELS
+from .thumbnail import EmbeddedThumbnail, read_thumbnail
 
 try:
     import pillow_heif
@@ -112,12 +114,21 @@ class Evidence:
         The decoded stored grid, read-only, shape ``(H, W)`` for one channel or
         ``(H, W, C)``; dtype as stored (``uint8``, ``uint16``, ``int32`` or
         ``float32``). Orientation is not applied.
+    max_pixels : int
+        The pixel limit the photo passed at intake (0 when it was not taken
+        in by :func:`load_evidence`; :meth:`decoding` then uses the default).
+    thumbnail : EmbeddedThumbnail or None
+        The EXIF (IFD1) thumbnail, read and decoded once at intake under the
+        limits of :mod:`.thumbnail`, or the sentence saying why it cannot be
+        read safely; None when the file names none. Consumers use this one
+        and never parse ``data`` for it again.
     """
 
     info: EvidenceInfo
     data: bytes
     pixels: np.ndarray
     max_pixels: int = 0
+    thumbnail: EmbeddedThumbnail | None = None
 
     @property
     def path(self) -> Path:
@@ -278,7 +289,7 @@ def _gps(gps_ifd: dict) -> GpsPosition | None:
     return GpsPosition(latitude=lat, longitude=lon, altitude_m=alt)
 
 
-def _read_exif(img: Image.Image) -> ExifSummary:
+def _read_exif(img: Image.Image, thumbnail_present: bool) -> ExifSummary:
     exif = img.getexif()
     ifds = {
         "IFD0": dict(exif),
@@ -295,7 +306,7 @@ def _read_exif(img: Image.Image) -> ExifSummary:
                 continue
             raw.append(RawTag(ifd=ifd_name, tag=int(tag), name=names.get(tag, f"0x{tag:04x}"), value=_safe_text(tags[tag])))
 
-    ifd0, sub, ifd1 = ifds["IFD0"], ifds["Exif"], ifds["IFD1"]
+    ifd0, sub = ifds["IFD0"], ifds["Exif"]
     tag = ExifTags.Base
     return ExifSummary(
         make=_clean_str(ifd0.get(tag.Make)),
@@ -311,7 +322,7 @@ def _read_exif(img: Image.Image) -> ExifSummary:
         exif_image_width=_int(sub.get(tag.ExifImageWidth)),
         exif_image_height=_int(sub.get(tag.ExifImageHeight)),
         gps=_gps(ifds["GPS"]),
-        thumbnail_present=bool(ifd1.get(tag.JpegIFOffset)) and bool(ifd1.get(tag.JpegIFByteCount)),
+        thumbnail_present=thumbnail_present,
         raw=raw,
     )
 
@@ -474,8 +485,13 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
             reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise EvidenceError(f"corrupt or truncated image: {reason}") from None
 
+        # Once, here: the metadata check, its figure and the report all use
+        # this reading. The limit is Pillow's global, so it is held under the
+        # intake's lock; a non-JPEG's EXIF is found by opening the file again.
+        with _pixel_limit(max(max_pixels, _THUMBNAIL_MAX_PIXELS)):
+            thumbnail = read_thumbnail(data, str(img.format))
         try:
-            exif = _read_exif(img)
+            exif = _read_exif(img, thumbnail is not None and thumbnail.named)
         except (SyntaxError, ValueError, TypeError, KeyError, IndexError, OSError, EOFError, struct.error,
                 ZeroDivisionError, RecursionError) as exc:
             # Broken EXIF is an observation about the file, not a reason to stop.
@@ -518,4 +534,4 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
         bad = int(pixels.size - np.isfinite(pixels).sum())
         note = f"{bad:,} sample(s) of the stored grid are not finite numbers (NaN or infinite); the detectors read them as 0."
         info.decoder_note = f"{info.decoder_note} {note}" if info.decoder_note else note
-    return Evidence(info=info, data=data, pixels=pixels, max_pixels=max_pixels)
+    return Evidence(info=info, data=data, pixels=pixels, max_pixels=max_pixels, thumbnail=thumbnail)

@@ -14,8 +14,9 @@ import io
 import warnings
 
 import numpy as np
-from PIL import ExifTags, Image
+from PIL import Image
 
+from ..thumbnail import EmbeddedThumbnail
 from .sections import Figure
 
 MAX_SIDE = 1600
@@ -24,9 +25,6 @@ MAX_SIDE = 1600
 #: JPEG, which keeps them readable at print resolution in a tenth of the bytes.
 MAX_LOSSLESS_SIDE = 600
 _JPEG_QUALITY = 85
-# An EXIF thumbnail is at most 64 kB by the standard; anything much larger is not one.
-_MAX_THUMBNAIL_BYTES = 256 * 1024
-_MAX_THUMBNAIL_PIXELS = 1024 * 1024
 
 
 def data_url(data: bytes, mime: str) -> str:
@@ -125,36 +123,11 @@ def for_report(figure: Figure, max_side: int = MAX_SIDE) -> tuple[bytes, str]:
             return _jpeg(img), "image/jpeg"
 
 
-def embedded_thumbnail(data: bytes) -> bytes | None:
-    """The EXIF thumbnail (IFD1) of the evidence, re-encoded as JPEG, or None.
+def thumbnail_jpeg(thumbnail: EmbeddedThumbnail | None) -> bytes | None:
+    """The evidence's EXIF thumbnail (``Evidence.thumbnail``) re-encoded as JPEG, or None when none decoded.
 
-    The offsets come from the evidence and are checked against the EXIF
-    block's length; the thumbnail is decoded by Pillow with a pixel limit,
-    and only the re-encoded pixels reach the report.
+    The intake read it bounds-checked and decoded it under a pixel limit;
+    only its re-encoded pixels reach the report, never the file's bytes.
     """
-    try:
-        with Image.open(io.BytesIO(data)) as img:
-            exif_block = img.info.get("exif")
-            if not exif_block:
-                return None
-            ifd1 = img.getexif().get_ifd(ExifTags.IFD.IFD1)
-    except (OSError, ValueError, SyntaxError, EOFError):
-        return None
-    offset, length = ifd1.get(ExifTags.Base.JpegIFOffset), ifd1.get(ExifTags.Base.JpegIFByteCount)
-    if not isinstance(offset, int) or not isinstance(length, int) or length <= 0 or length > _MAX_THUMBNAIL_BYTES:
-        return None
-    # Offsets in EXIF count from the TIFF header, which follows "Exif\0\0".
-    tiff = exif_block[6:] if exif_block.startswith(b"Exif\x00\x00") else exif_block
-    if offset < 0 or offset + length > len(tiff):
-        return None
-    blob = tiff[offset : offset + length]
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", Image.DecompressionBombWarning)
-            with Image.open(io.BytesIO(blob), formats=["JPEG"]) as thumb:
-                if thumb.size[0] * thumb.size[1] > _MAX_THUMBNAIL_PIXELS:
-                    return None
-                thumb.load()
-                return _jpeg(thumb)
-    except (OSError, ValueError, SyntaxError, EOFError, Image.DecompressionBombWarning, Image.DecompressionBombError):
-        return None
+    img = None if thumbnail is None else thumbnail.image()
+    return None if img is None else _jpeg(img)

@@ -329,7 +329,7 @@ def render_html(findings: Findings, evidence: Evidence, signature: SignatureInfo
     """
     css = _stylesheet(options.paper)
     built = list(sections) if sections is not None else [section_for(host, f, evidence) for f in findings.detectors]
-    thumbnail = images.embedded_thumbnail(evidence.data) if findings.evidence.exif.thumbnail_present else None
+    thumbnail = images.thumbnail_jpeg(evidence.thumbnail)
     ev = findings.evidence
     context = {
         "csp": _csp(css),
@@ -346,8 +346,8 @@ def render_html(findings: Findings, evidence: Evidence, signature: SignatureInfo
         "camera_rows": _camera_rows(ev.exif),
         "photo_src": images.data_url(images.preview(evidence.pixels), "image/jpeg"),
         "thumbnail_src": images.data_url(thumbnail, "image/jpeg") if thumbnail else None,
-        "thumbnail_note": ("The EXIF data names a thumbnail, but it could not be read."
-                           if ev.exif.thumbnail_present else "The file carries no embedded thumbnail."),
+        "thumbnail_note": (f"The EXIF data names a thumbnail, but it could not be read: {evidence.thumbnail.error}."
+                           if evidence.thumbnail is not None else "The file carries no embedded thumbnail."),
         "summary": _summary(findings),
         "sections": built,
         "status_words": wording.STATUS_WORDS,

@@ -35,7 +35,13 @@ from .xmp import xmp_agents
 
 
 def thresholds(params: Mapping[str, Any]) -> ThumbnailThresholds:
-    """The thumbnail check's limits from the detector's parameters."""
+    """The thumbnail check's limits from the detector's parameters.
+
+    ``thumbnail_max_bytes`` and ``thumbnail_max_pixels`` apply to the
+    thumbnail the intake read under its own limits (256 kB and 1,048,576
+    pixels, their defaults): they can refuse what the intake accepted, not
+    admit what it refused.
+    """
     return ThumbnailThresholds(
         max_bytes=int(params["thumbnail_max_bytes"]),
         max_pixels=int(params["thumbnail_max_pixels"]),
@@ -67,7 +73,8 @@ def analyse(evidence: Evidence, params: Mapping[str, Any], prior: Mapping[str, D
     ----------
     evidence : Evidence
         Read, never written: ``info`` (EXIF summary, format, size, quantisation
-        tables), ``data`` (for the thumbnail) and ``pixels`` (to compare with it).
+        tables), ``data`` (for XMP), ``thumbnail`` (the EXIF thumbnail as the
+        intake read it) and ``pixels`` (to compare with it).
     params : mapping
         :data:`DEFAULT_PARAMS` with the user's overrides.
     prior : mapping
@@ -90,7 +97,7 @@ def analyse(evidence: Evidence, params: Mapping[str, Any], prior: Mapping[str, D
 
     t = time.perf_counter()
     limits = thresholds(params)
-    thumb, thumb_details = thumbnail_check(evidence.data, info.format, evidence.pixels, limits)
+    thumb, thumb_details = thumbnail_check(evidence.thumbnail, evidence.pixels, limits)
     checks.append(thumb)
     marks["thumbnail"] = round(time.perf_counter() - t, 4)
 

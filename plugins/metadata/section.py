@@ -12,7 +12,7 @@ from .detector import thresholds
 from .spec import DEFAULT_PARAMS, REFERENCES
 from .figures import lens_plot_svg, thumbnail_png
 from .real_rates import corpus_sentence, rate_sentence
-from .thumbnail import ThumbnailError, compare, extract, luma_of
+from .thumbnail import accepted, compare, luma_of
 
 
 def _num(value: float | None, fmt: str) -> str:
@@ -52,10 +52,7 @@ def _figures(finding: DetectorFinding, evidence: Evidence) -> dict[str, Figure]:
     params = {**DEFAULT_PARAMS, **finding.parameters}
     limits = thresholds(params)
     if finding.details.get("thumbnail", {}).get("present"):
-        try:
-            thumb = extract(evidence.data, evidence.info.format, limits)
-        except ThumbnailError:
-            thumb = None
+        thumb = accepted(evidence.thumbnail, limits)
         if thumb is not None:
             cmp = compare(evidence.pixels, luma_of(thumb), limits.aspect_tolerance, limits.blur_px,
                           limits.change_threshold)

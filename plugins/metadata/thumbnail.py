@@ -9,14 +9,15 @@ editing (Kee & Farid 2010 study thumbnails as forensic evidence; editors
 that do regenerate the thumbnail leave one that matches, which this check
 cannot tell from the camera's).
 
-Stages: find the EXIF block in the file (:func:`exif_block`), walk the TIFF
-structure to IFD1 with every offset bounds-checked (:func:`thumbnail_bytes`),
-decode the thumbnail under a size and pixel limit (:func:`decode`), locate its
-picture area (cameras letterbox a 3:2 picture into a 4:3 thumbnail with black
-bands; :func:`content_box`), find the part of the image it shows and compare
-the two through a fitted tone curve (:func:`compare`). Neither the thumbnail
-nor the image has the orientation tag applied: both are stored in the
-sensor's frame.
+The intake reads and decodes the thumbnail once, bounds-checked and under
+its own size and pixel limits (``Evidence.thumbnail``, a
+:class:`forensics_core.EmbeddedThumbnail`); the check's own limits
+``thumbnail_max_bytes`` and ``thumbnail_max_pixels`` apply on top of those.
+Stages here: locate the thumbnail's picture area (cameras letterbox a 3:2
+picture into a 4:3 thumbnail with black bands; :func:`content_box`), find the
+part of the image it shows and compare the two through a fitted tone curve
+(:func:`compare`). Neither the thumbnail nor the image has the orientation
+tag applied: both are stored in the sensor's frame.
 
 What real cameras do, measured on 58 camera originals of about 50 models:
 the Nikon D70/D70s/D200 letterbox a 3:2 picture into 160 x 120 (the D70 with
@@ -29,10 +30,7 @@ correlation above 0.99 and no differing region above 0.12 % of the picture.
 
 from __future__ import annotations
 
-import io
 import math
-import struct
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,11 +38,10 @@ from PIL import Image
 from scipy import ndimage, optimize
 from scipy.optimize import isotonic_regression
 
-from .checks import JPEG_FORMATS, Check
+from forensics_core import EmbeddedThumbnail
 
-_EXIF_HEADER = b"Exif\x00\x00"
-_MAX_IFD_ENTRIES = 1024
-_TAG_JPEG_OFFSET, _TAG_JPEG_LENGTH = 0x0201, 0x0202
+from .checks import Check
+
 # Bands a camera fills to letterbox the picture: nearly uniform (luma standard
 # deviation below this, on a [0, 1] scale) once the row or column next to the
 # picture, which JPEG ringing touches, is left out.
@@ -59,10 +56,6 @@ _OVERSAMPLE = 4
 _WORK_PX = 192
 _EDGE_PX = 2
 _TONE_BINS = 256
-
-
-class ThumbnailError(ValueError):
-    """The file's thumbnail data is malformed; the message says how, in one sentence."""
 
 
 @dataclass(frozen=True)
@@ -116,153 +109,6 @@ class Comparison:
     region_fraction: float | None = None
     changed_box: tuple[int, int, int, int] | None = None
     difference: np.ndarray | None = None
-
-
-def exif_block(data: bytes, file_format: str) -> bytes | None:
-    """The TIFF structure of the file's EXIF, without the ``Exif\\0\\0`` header.
-
-    For a JPEG the marker segments before the first scan are walked and the
-    first APP1 segment holding EXIF is returned; for other formats Pillow's
-    reading of the EXIF chunk is used.
-
-    Raises
-    ------
-    ThumbnailError
-        When a JPEG marker segment runs past the end of the file.
-    """
-    if file_format not in JPEG_FORMATS:
-        try:
-            with Image.open(io.BytesIO(data)) as img:
-                raw = img.info.get("exif")
-        except (OSError, ValueError, SyntaxError, EOFError):
-            return None
-        if not raw:
-            return None
-        return raw[len(_EXIF_HEADER):] if raw.startswith(_EXIF_HEADER) else raw
-    if data[:2] != b"\xff\xd8":
-        raise ThumbnailError("the file does not start with a JPEG SOI marker")
-    i = 2
-    while i + 4 <= len(data):
-        if data[i] != 0xFF:
-            raise ThumbnailError(f"no JPEG marker at byte {i} where one was expected")
-        marker = data[i + 1]
-        if marker == 0xFF:
-            i += 1
-            continue
-        if marker == 0x01 or 0xD0 <= marker <= 0xD8:
-            i += 2
-            continue
-        if marker in (0xDA, 0xD9):
-            return None
-        length = int.from_bytes(data[i + 2:i + 4], "big")
-        if length < 2 or i + 2 + length > len(data):
-            raise ThumbnailError(f"JPEG marker segment 0xFF{marker:02X} at byte {i} claims {length} bytes, "
-                                 "past the end of the file")
-        if marker == 0xE1 and data[i + 4:i + 4 + len(_EXIF_HEADER)] == _EXIF_HEADER:
-            return data[i + 4 + len(_EXIF_HEADER):i + 2 + length]
-        i += 2 + length
-    return None
-
-
-def _read_ifd(tiff: bytes, offset: int, endian: str) -> tuple[dict[int, tuple[int, int, bytes]], int]:
-    """Entries ``tag -> (type, count, 4-byte value field)`` of the IFD at ``offset``, and the next IFD's offset."""
-    if offset < 8 or offset + 2 > len(tiff):
-        raise ThumbnailError(f"an IFD offset ({offset}) points outside the {len(tiff)}-byte EXIF block")
-    (n,) = struct.unpack_from(endian + "H", tiff, offset)
-    end = offset + 2 + 12 * n
-    if n > _MAX_IFD_ENTRIES or end + 4 > len(tiff):
-        raise ThumbnailError(f"the IFD at offset {offset} claims {n} entries, more than the EXIF block holds")
-    entries = {}
-    for k in range(n):
-        tag, typ, count = struct.unpack_from(endian + "HHI", tiff, offset + 2 + 12 * k)
-        entries[tag] = (typ, count, tiff[offset + 10 + 12 * k:offset + 14 + 12 * k])
-    (next_offset,) = struct.unpack_from(endian + "I", tiff, end)
-    return entries, next_offset
-
-
-def _scalar(entry: tuple[int, int, bytes] | None, endian: str) -> int | None:
-    """A SHORT or LONG entry with one value, or None."""
-    if entry is None or entry[1] != 1:
-        return None
-    typ, _, field = entry
-    if typ == 3:
-        return struct.unpack_from(endian + "H", field)[0]
-    if typ == 4:
-        return struct.unpack_from(endian + "I", field)[0]
-    return None
-
-
-def thumbnail_bytes(tiff: bytes, max_bytes: int) -> bytes | None:
-    """The JPEG thumbnail that IFD1 points to.
-
-    None when there is no IFD1 or it names no JPEG thumbnail; empty bytes when
-    it names one of length 0 (software that drops the thumbnail may leave that).
-
-    Parameters
-    ----------
-    tiff : bytes
-        The EXIF TIFF structure (from :func:`exif_block`).
-    max_bytes : int
-        Larger thumbnails are refused: the standard limits them to 64 kB.
-
-    Raises
-    ------
-    ThumbnailError
-        On a malformed header or IFD, offsets outside the block, an oversized
-        thumbnail or one that is not a JPEG stream.
-    """
-    if len(tiff) < 8 or tiff[:2] not in (b"II", b"MM"):
-        raise ThumbnailError("the EXIF block has no valid TIFF header")
-    endian = "<" if tiff[:2] == b"II" else ">"
-    magic, ifd0 = struct.unpack_from(endian + "HI", tiff, 2)
-    if magic != 42:
-        raise ThumbnailError("the EXIF block has no valid TIFF header")
-    _, ifd1 = _read_ifd(tiff, ifd0, endian)
-    if ifd1 == 0:
-        return None
-    entries, _ = _read_ifd(tiff, ifd1, endian)
-    offset = _scalar(entries.get(_TAG_JPEG_OFFSET), endian)
-    length = _scalar(entries.get(_TAG_JPEG_LENGTH), endian)
-    if offset is None and length is None:
-        return None
-    if offset is None or length is None:
-        raise ThumbnailError("IFD1 gives the thumbnail's offset or length but not both")
-    if length == 0:
-        return b""
-    if length > max_bytes:
-        raise ThumbnailError(f"IFD1 claims a {length}-byte thumbnail, more than the {max_bytes} bytes accepted")
-    if offset < 8 or offset + length > len(tiff):
-        raise ThumbnailError(f"IFD1 places the thumbnail at bytes {offset}-{offset + length}, outside the "
-                             f"{len(tiff)}-byte EXIF block")
-    blob = tiff[offset:offset + length]
-    if blob[:2] != b"\xff\xd8":
-        raise ThumbnailError("the bytes IFD1 points to are not a JPEG stream")
-    return blob
-
-
-def decode(blob: bytes, max_pixels: int) -> Image.Image:
-    """The thumbnail decoded as RGB, refusing more than ``max_pixels`` pixels.
-
-    Raises
-    ------
-    ThumbnailError
-        When it does not decode or is too large.
-    """
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", Image.DecompressionBombWarning)
-            with Image.open(io.BytesIO(blob), formats=["JPEG"]) as img:
-                w, h = img.size
-                if w * h > max_pixels or w < 1 or h < 1:
-                    raise ThumbnailError(f"the thumbnail claims {w} x {h} pixels, outside the accepted 1 to "
-                                         f"{max_pixels}")
-                img.load()
-                return img.convert("RGB")
-    except ThumbnailError:
-        raise
-    except (OSError, ValueError, SyntaxError, EOFError, struct.error, Image.DecompressionBombWarning,
-            Image.DecompressionBombError) as exc:
-        raise ThumbnailError(f"the thumbnail does not decode ({type(exc).__name__})") from None
 
 
 def luma_of(img: Image.Image) -> np.ndarray:
@@ -535,21 +381,11 @@ class ThumbnailThresholds:
     max_region_fraction: float
 
 
-def extract(data: bytes, file_format: str, limits: ThumbnailThresholds) -> Image.Image | None:
-    """The decoded thumbnail, or None when the file has none.
-
-    Raises
-    ------
-    ThumbnailError
-        When the file names a thumbnail that cannot be read safely.
-    """
-    tiff = exif_block(data, file_format)
-    if tiff is None:
+def accepted(thumb: EmbeddedThumbnail | None, limits: ThumbnailThresholds) -> Image.Image | None:
+    """The intake's decoded thumbnail as RGB, or None when there is none or ``limits`` refuse it."""
+    if thumb is None or thumb.refusal(limits.max_bytes, limits.max_pixels) is not None:
         return None
-    blob = thumbnail_bytes(tiff, limits.max_bytes)
-    if blob == b"":
-        raise ThumbnailError("IFD1 points to a thumbnail of 0 bytes")
-    return None if blob is None else decode(blob, limits.max_pixels)
+    return thumb.image()
 
 
 def _details(img: Image.Image | None, cmp: Comparison | None, limits: ThumbnailThresholds, **extra) -> dict:
@@ -584,15 +420,32 @@ def _details(img: Image.Image | None, cmp: Comparison | None, limits: ThumbnailT
     return out
 
 
-def thumbnail_check(data: bytes, file_format: str, pixels: np.ndarray,
+def thumbnail_check(thumb: EmbeddedThumbnail | None, pixels: np.ndarray,
                     limits: ThumbnailThresholds) -> tuple[Check, dict]:
-    """The thumbnail check and its numbers for the finding's details."""
+    """The thumbnail check and its numbers for the finding's details.
+
+    Parameters
+    ----------
+    thumb : EmbeddedThumbnail or None
+        The thumbnail as the intake read it (``Evidence.thumbnail``).
+    pixels : ndarray, shape (H, W) or (H, W, C)
+        The evidence's stored grid.
+    limits : ThumbnailThresholds
+        The check's thresholds; its byte and pixel limits refuse a thumbnail
+        the intake accepted as the intake refuses one, with the same sentence.
+
+    Returns
+    -------
+    check : Check
+    details : dict
+        For the finding's ``details["thumbnail"]``.
+    """
     title = "Embedded thumbnail"
-    try:
-        img = extract(data, file_format, limits)
-    except ThumbnailError as exc:
-        return (Check("thumbnail", title, "note", f"The EXIF names a thumbnail that cannot be used: {exc}."),
-                _details(None, None, limits, error=str(exc)))
+    reason = None if thumb is None else thumb.refusal(limits.max_bytes, limits.max_pixels)
+    if reason is not None:
+        return (Check("thumbnail", title, "note", f"The EXIF names a thumbnail that cannot be used: {reason}."),
+                _details(None, None, limits, error=reason))
+    img = None if thumb is None else thumb.image()
     if img is None:
         return (Check("thumbnail", title, "not available", "The file carries no JPEG thumbnail in IFD1."),
                 _details(None, None, limits))

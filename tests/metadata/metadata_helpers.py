@@ -11,6 +11,7 @@ from PIL import ExifTags, Image, TiffImagePlugin
 
 from forensics_core.evidence import Evidence, load_evidence
 from forensics_core.findings import EvidenceInfo, ExifSummary, RawTag
+from forensics_core.thumbnail import read_thumbnail
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
@@ -106,7 +107,8 @@ def info(width: int = 640, height: int = 480, fmt: str = "JPEG", **exif) -> Evid
 
 
 def fake_evidence(data: bytes, pixels: np.ndarray, evidence_info: EvidenceInfo) -> Evidence:
-    """Evidence with arbitrary (possibly hostile) bytes, for inputs the intake would refuse."""
+    """Evidence with arbitrary (possibly hostile) bytes, for inputs the intake would refuse; its thumbnail read
+    from ``data`` as the intake reads it."""
     px = np.ascontiguousarray(pixels)
     px.flags.writeable = False
-    return Evidence(info=evidence_info, data=data, pixels=px)
+    return Evidence(info=evidence_info, data=data, pixels=px, thumbnail=read_thumbnail(data, evidence_info.format))
