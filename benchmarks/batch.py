@@ -41,7 +41,7 @@ SIZE = (3000, 2000)
 
 
 def _render(seed: int) -> Path:
-    from forensics_plugins.lens_distortion.synth import render_authentic
+    from forensics_plugins.lens_distortion.photo import render_authentic
 
     path = PHOTOS / f"photo_{seed:03d}.jpg"
     if not path.exists():

@@ -71,7 +71,7 @@ def photo(mp: float) -> Path:
     h = int(round(w * 3 / 4 / 8) * 8)
     path = OUT / f"e2e_{w}x{h}.jpg"
     if not path.exists():
-        from forensics_plugins.lens_distortion.synth import render_authentic
+        from forensics_plugins.lens_distortion.photo import render_authentic
 
         OUT.mkdir(parents=True, exist_ok=True)
         path.write_bytes(render_authentic(11, size=(w, h), k1=0.06, jpeg_quality=90).jpeg_bytes)

@@ -42,7 +42,7 @@ print(json.dumps({"stages": stages, "peak_mb": hwm_mb(), "baseline_mb": base, "s
 def photo(size: tuple[int, int]) -> Path:
     path = OUT / f"lens_{size[0]}x{size[1]}.jpg"
     if not path.exists():
-        from forensics_plugins.lens_distortion.synth import render_authentic
+        from forensics_plugins.lens_distortion.photo import render_authentic
 
         OUT.mkdir(parents=True, exist_ok=True)
         path.write_bytes(render_authentic(7, size=size, k1=0.08, jpeg_quality=90).jpeg_bytes)

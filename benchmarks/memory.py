@@ -40,7 +40,7 @@ def photo(mp: float) -> Path:
     path = OUT / f"memory_{w}x{h}.jpg"
     if path.exists():
         return path
-    from forensics_plugins.lens_distortion.synth import render_authentic
+    from forensics_plugins.lens_distortion.photo import render_authentic
 
     OUT.mkdir(parents=True, exist_ok=True)
     small = render_authentic(11, size=(w // 4, h // 4), k1=0.06, jpeg_quality=95).jpeg_bytes

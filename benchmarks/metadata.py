@@ -83,7 +83,7 @@ def photo(size: tuple[int, int]) -> Path:
     if not path.exists():
         from PIL import Image
 
-        from forensics_plugins.lens_distortion.synth import render_authentic
+        from forensics_plugins.lens_distortion.photo import render_authentic
         from forensics_plugins.metadata.conversion import predict, unit_scale
         from forensics_plugins.metadata.lensdb import lookup
 

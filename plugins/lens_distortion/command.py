@@ -1,9 +1,9 @@
 """``forensics synth``: the lens plugin's command, writing synthetic photos with known lens distortion.
 
-The command's options are declared here, apart from the scene model
-(:mod:`.synth`), which is imported only when the command runs: every
-``forensics`` invocation registers the command, and ``--help`` should not
-pay for the renderer.
+The command's options are declared here, apart from the generator
+(:mod:`.splice` and :mod:`.truth`), which is imported only when the command
+runs: every ``forensics`` invocation registers the command, and ``--help``
+should not pay for the renderer.
 """
 
 from __future__ import annotations
@@ -54,7 +54,8 @@ def synth_command(
     scene of seed SEED + i, so splices pair with their authentic original.
     Identical arguments give identical files.
     """
-    from .synth import make_splice, write
+    from .splice import make_splice
+    from .truth import write
 
     kinds = KINDS if kind == "all" else (kind,)
     post = {

@@ -46,7 +46,7 @@ def forensics_register_commands(cli):
 
 @hookimpl
 def forensics_synthetic_cases(seed, count):
-    from .synth import validation_cases
+    from .cases import validation_cases
 
     return validation_cases(seed, count)
 

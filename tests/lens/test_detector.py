@@ -16,9 +16,10 @@ import pytest
 from PIL import Image
 
 from forensics_core import Status, analyze
-from forensics_plugins.lens_distortion import synth
 from forensics_plugins.lens_distortion.detector import analyse
+from forensics_plugins.lens_distortion.photo import render_authentic
 from forensics_plugins.lens_distortion.spec import DEFAULT_PARAMS
+from forensics_plugins.lens_distortion.splice import make_splice
 
 VIEWS = ("left01", "left02", "left03", "left04", "left05")
 KINDS = ("copy_move", "other_camera", "other_zoom")
@@ -72,7 +73,7 @@ def test_global_k1_recovered_on_synthetic_authentic_photos():
     errors = []
     for seed in range(8):
         k1 = camera(100 + seed)
-        img = synth.render_authentic(100 + seed, size=(1600, 1200), k1=k1, jpeg_quality=80 + 2 * seed)
+        img = render_authentic(100 + seed, size=(1600, 1200), k1=k1, jpeg_quality=80 + 2 * seed)
         result = analyse(luma_of(img.jpeg_bytes), DEFAULT_PARAMS)
         assert result.status is Status.OK, result.summary
         errors.append(result.details["global_model"]["k1"] - k1)
@@ -89,14 +90,14 @@ def test_detection_rate_and_false_alarms_on_synthetic_splices():
     alpha = DEFAULT_PARAMS["alpha"]
     false_alarms, inconclusive_a = 0, 0
     for seed in range(N_AUTHENTIC):
-        img = synth.render_authentic(500 + seed, size=(1600, 1200), k1=camera(500 + seed), jpeg_quality=90)
+        img = render_authentic(500 + seed, size=(1600, 1200), k1=camera(500 + seed), jpeg_quality=90)
         result = analyse(luma_of(img.jpeg_bytes), DEFAULT_PARAMS)
         inconclusive_a += result.status is Status.INCONCLUSIVE
         false_alarms += result.status is Status.OK and result.p_value < alpha
     detected, detected_default, inconclusive_s = 0, 0, 0
     for seed in range(N_SPLICED):
         kind = KINDS[seed % len(KINDS)]
-        img = synth.make_splice(kind, 700 + seed, size=(1600, 1200), k1=camera(700 + seed), jpeg_quality=90)
+        img = make_splice(kind, 700 + seed, size=(1600, 1200), k1=camera(700 + seed), jpeg_quality=90)
         luma = luma_of(img.jpeg_bytes)
         result = analyse(luma, SYNTHETIC)
         inconclusive_s += result.status is Status.INCONCLUSIVE

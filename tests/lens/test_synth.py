@@ -10,16 +10,11 @@ from PIL import Image
 
 from forensics_plugins.lens_distortion.command import synth_command
 from forensics_plugins.lens_distortion.geometry import norm_scale, to_normalised, undistort
-from forensics_plugins.lens_distortion.synth import (
-    SPLICE_KINDS,
-    ConvexPolygon,
-    Scene,
-    generate,
-    make_splice,
-    render_authentic,
-    render_scene,
-    write,
-)
+from forensics_plugins.lens_distortion.photo import render_authentic
+from forensics_plugins.lens_distortion.render import render_scene
+from forensics_plugins.lens_distortion.scene import ConvexPolygon, Scene
+from forensics_plugins.lens_distortion.splice import SPLICE_KINDS, generate, make_splice
+from forensics_plugins.lens_distortion.truth import write
 
 SIZE = (400, 300)
 SHAPE = (SIZE[1], SIZE[0])

@@ -13,12 +13,13 @@ from forensics_core import DetectorFinding
 from forensics_core.evidence import load_evidence
 from forensics_plugins.lens_distortion.spec import DEFAULT_PARAMS as LENS_PARAMS
 from forensics_plugins.lens_distortion.detector import analyse as lens_analyse
-from forensics_plugins.lens_distortion.synth import render_authentic
+from forensics_plugins.lens_distortion.photo import render_authentic
 from forensics_plugins.metadata.conversion import predict, unit_scale
 from forensics_plugins.metadata.detector import thresholds
 from forensics_plugins.metadata.spec import DEFAULT_PARAMS
 from forensics_plugins.metadata.lens_check import compare
 from forensics_plugins.metadata.lensdb import lookup
+from forensics_core.thumbnail import read_thumbnail
 from forensics_plugins.metadata.thumbnail import thumbnail_check
 from metadata_helpers import DATA, camera_thumbnail, exif_bytes, info, jpeg, with_thumbnail
 
@@ -61,13 +62,13 @@ def test_thumbnail_false_alarms_and_detection():
     negatives, detected = [], {s: [] for s in SPLICE_SIDES}
     for name in ("canon_hdr_NO.jpg", "nikon-e950.jpg", "Canon_40D.jpg", "BlueSquare.jpg"):
         ev = load_evidence(DATA / "exif" / name)
-        check, _ = thumbnail_check(ev.data, ev.info.format, ev.pixels, LIMITS)
+        check, _ = thumbnail_check(ev.thumbnail, ev.pixels, LIMITS)
         negatives.append((name, check.outcome))
     for i, (name, img) in enumerate(bases.items()):
         block = with_thumbnail(exif_bytes(make="Canon", model="Canon PowerShot SX60 HS"), camera_thumbnail(img))
         for quality in (75, 95):
             data = jpeg(img, block, quality=quality)
-            check, _ = thumbnail_check(data, "JPEG", _decoded(data), LIMITS)
+            check, _ = thumbnail_check(read_thumbnail(data, "JPEG"), _decoded(data), LIMITS)
             negatives.append((f"{name} re-saved q{quality}", check.outcome))
         arr = np.asarray(img)
         h, w = arr.shape[:2]
@@ -80,7 +81,7 @@ def test_thumbnail_false_alarms_and_detection():
                 spliced = arr.copy()
                 spliced[y:y + bh, x:x + bw] = donor[dy:dy + bh, dx:dx + bw]
                 data = jpeg(Image.fromarray(spliced), block, quality=90)
-                check, _ = thumbnail_check(data, "JPEG", _decoded(data), LIMITS)
+                check, _ = thumbnail_check(read_thumbnail(data, "JPEG"), _decoded(data), LIMITS)
                 detected[side].append(check.outcome == "suspicious")
     false_alarms = [n for n, outcome in negatives if outcome == "suspicious"]
     print(f"\nthumbnail check: false alarms {len(false_alarms)} of {len(negatives)} negatives {false_alarms}")
@@ -115,7 +116,7 @@ def _info(camera, lens_text, focal, size):
 def test_lens_comparison_on_rendered_photos():
     """The lens detector measures photos rendered through the named lens's lensfun distortion.
 
-    Each photo is a synthetic authentic scene (lens_distortion.synth) rendered
+    Each photo is a synthetic authentic scene (lens_distortion.photo) rendered
     with the (k1, k2) that lensfun predicts for the lens at that focal length
     and saved as JPEG quality 92. Matched: the EXIF names that focal length
     (expected "agrees"). Mismatched: it names another, whose prediction differs
