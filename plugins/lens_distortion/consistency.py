@@ -78,8 +78,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares
-from scipy.stats import chi2, norm
-from scipy.stats import t as student_t
+from scipy.special import chdtrc, ndtri, stdtr
 
 from .geometry import norm_scale, to_normalised
 from .error_model import BOW_REL, DOF, TAU_K1, TAU_REGION
@@ -369,8 +368,8 @@ def paper_rules(
     d, k, se = (np.asarray(a, dtype=np.float64) for a in (distances, k1, k1_stderr))
     usable = np.flatnonzero(np.isfinite(se) & (se > 0))
     m = usable.size
-    z_sign = float(norm.isf(alpha / max(m, 1)))
-    z_order = float(norm.isf(alpha / max(m * (m - 1) // 2, 1)))
+    z_sign = float(-ndtri(alpha / max(m, 1)))
+    z_order = float(-ndtri(alpha / max(m * (m - 1) // 2, 1)))
     if m == 0:
         return PaperRules(0, (), (), (), z_sign, z_order, True)
     sign = int(np.sign(_weighted_median(k[usable], se[usable] ** -2.0)))
@@ -810,15 +809,15 @@ def _decide(
     own_var = np.array([f.k1_stderr**2 for f in fits]) + model_var
     dep = _departures(lines, beta, cov, noise, model_var, np.array([f.k1 for f in fits]), own_var)
 
-    line_p = 2.0 * student_t.sf(np.abs(dep.z), dof)
-    line_z = np.sign(dep.z) * norm.isf(line_p / 2.0)
+    line_p = 2.0 * stdtr(dof, -np.abs(dep.z))
+    line_z = np.sign(dep.z) * -ndtri(line_p / 2.0)
     directions = np.array([np.arctan2(*(p[-1] - p[0])[::-1]) for p in chosen])
     groups = _candidate_groups(np.array([p.mean(axis=0) for p in chosen]), directions, max_group_size)
     g_delta, g_se, g_q = _group_tests(groups, dep, cov)
     g_z = g_delta / g_se
-    regional = 2.0 * student_t.sf(np.abs(g_delta) / np.hypot(g_se, tau_region), dof)
+    regional = 2.0 * stdtr(dof, -np.abs(g_delta) / np.hypot(g_se, tau_region))
     group_p = np.maximum(_group_p(groups, dep, cov, line_p, dof), regional)
-    het_p = chi2.sf(g_q, np.array([len(g) for g in groups]) - 1)
+    het_p = chdtrc(np.array([len(g) for g in groups]) - 1, g_q)
     homogeneous = het_p >= alpha
     group_flag = (group_p * len(groups) < alpha) & homogeneous
     line_flag = line_p * line_p.size < alpha
@@ -900,7 +899,7 @@ def _group_p(
             c = grad @ cov @ grad.T + np.diag(dep.line_var[rest])
             solved = np.linalg.solve(c, np.column_stack((np.ones(rest.size), dep.delta[rest])))
             info = solved[:, 0].sum()
-            left_out.append(2.0 * student_t.sf(abs(solved[:, 0] @ dep.delta[rest]) * info**-0.5, dof))
+            left_out.append(2.0 * stdtr(dof, -abs(solved[:, 0] @ dep.delta[rest]) * info**-0.5))
         out[k] = min(1.0, 2.0 * min(weakest, max(left_out)))
     return out
 

@@ -29,7 +29,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from scipy import stats
+from scipy.special import ndtri
 
 from forensics_core import DetectorFinding, EvidenceInfo, RadialDistortion, Status
 
@@ -140,7 +140,7 @@ def compare(info: EvidenceInfo, lens_finding: DetectorFinding | None, dims_chang
         return LensComparison("lens detector did not measure k1", reason, lens, prediction, None, None, None)
     d = measured["k1"] - prediction.k1
     se = measured["k1_stderr"]
-    z_crit = float(stats.norm.isf(alpha / 2))
+    z_crit = float(-ndtri(alpha / 2))
     outcome = "disagrees" if (abs(d) - tolerance) / se > z_crit else "agrees"
     return LensComparison(outcome, None, lens, prediction, measured, d, d / se)
 
@@ -168,7 +168,7 @@ def lens_check(cmp: LensComparison, tolerance: float, alpha: float) -> Check:
     if cmp.outcome == "lens detector did not measure k1":
         return Check("lens", title, "not available",
                      f"lensfun predicts k1 = {pred.k1:+.4f} for {source}, but {cmp.reason}.")
-    z_crit = float(stats.norm.isf(alpha / 2))
+    z_crit = float(-ndtri(alpha / 2))
     m = cmp.measured
     text = (f"lensfun predicts k1 = {pred.k1:+.4f} for {source}; the lens detector measured "
             f"{m['k1']:+.4f} ± {m['k1_stderr']:.4f} (difference {cmp.difference:+.4f}, z = {cmp.z:+.1f}; tolerance "
@@ -211,6 +211,6 @@ def details(cmp: LensComparison, tolerance: float, alpha: float) -> dict[str, An
         "z": None if cmp.z is None else round(cmp.z, 3),
         "tolerance": tolerance,
         "alpha": alpha,
-        "z_crit": round(float(stats.norm.isf(alpha / 2)), 4),
+        "z_crit": round(float(-ndtri(alpha / 2)), 4),
         "units": "k1, k2 normalised: image centre at 0, half the larger side = 1; distorted to undistorted",
     }
