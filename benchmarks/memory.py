@@ -1,6 +1,7 @@
 """Peak memory of ``forensics analyze`` on a very large photo, the whole process tree counted once.
 
-Usage: ``python benchmarks/memory.py [--runs 3] [--mp 100] [--format json] [--photo FILE] [--baseline TREE]``
+Usage: ``python benchmarks/memory.py [--runs 3] [--mp 100] [--format json] [--photo FILE] [--jobs N]
+[--baseline TREE]``
 
 Without ``--photo``, a synthetic authentic JPEG of ``--mp`` megapixels (4:3,
 quality 90: a photo of a building from the lens plugin's scene model, scaled
@@ -100,11 +101,11 @@ def _hwm_kb(pid: int) -> int:
     return 0
 
 
-def one_run(target: Path, fmt: str, env: dict[str, str]) -> dict[str, float]:
+def one_run(target: Path, fmt: str, env: dict[str, str], extra: list[str]) -> dict[str, float]:
     with tempfile.TemporaryDirectory() as out:
         t0 = time.perf_counter()
         proc = subprocess.Popen([sys.executable, "-m", "forensics_core", "analyze", str(target), "--out", out,
-                                 "--format", fmt], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                 "--format", fmt, *extra], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                 # Not this tree's folder: `python -m` would import its forensics_core first.
                                 cwd=env["FORENSICS_HOME"])
         peak_tree = peak_main = 0
@@ -126,6 +127,8 @@ def main() -> None:
     parser.add_argument("--format", default="json", help="analyze's --format (default json).")
     parser.add_argument("--photo", type=Path, help="Measure this photo instead of the synthetic one.")
     parser.add_argument("--baseline", type=Path, help="Source tree of the version to compare with.")
+    parser.add_argument("--jobs", type=int,
+                        help="analyze's --jobs for this tree (default: analyze's own; a baseline has none).")
     args = parser.parse_args()
     target = args.photo or photo(args.mp)
     from PIL import Image
@@ -142,7 +145,8 @@ def main() -> None:
             if tree is not None:
                 (Path(home) / "forensics_plugins").symlink_to(tree / "plugins")
                 env["PYTHONPATH"] = os.pathsep.join([str(tree), home])
-            runs = [one_run(target, args.format, env) for _ in range(args.runs)]
+            extra = ["--jobs", str(args.jobs)] if args.jobs and tree is None else []
+            runs = [one_run(target, args.format, env, extra) for _ in range(args.runs)]
         for key, label in (("tree_mb", "peak PSS, process tree MB"), ("main_mb", "peak RSS, command MB"),
                            ("wall_s", "wall time s")):
             v = [r[key] for r in runs]

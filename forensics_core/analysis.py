@@ -13,7 +13,7 @@ from __future__ import annotations
 import os
 import platform
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from importlib.metadata import PackageNotFoundError, version
@@ -25,6 +25,7 @@ from .findings import (
     SCHEMA_VERSION,
     DetectorFinding,
     DetectorResult,
+    DetectorSpec,
     Findings,
     MalformedResult,
     Status,
@@ -34,8 +35,8 @@ from .findings import (
     check_result,
     to_jsonable,
 )
-from .containment import can_fork, run_forked, run_threaded
-from .defaults import DEFAULT_MAX_PIXELS, DEFAULT_TIMEOUT_S, ISOLATIONS
+from .containment import Child, can_fork, run_forked, run_threaded, wait_any
+from .defaults import DEFAULT_MAX_PIXELS, DEFAULT_TIMEOUT_S, ISOLATIONS, PARALLEL_MAX_PIXELS
 from .evaluation import calibration_file, decide_by_lr, evaluate
 from .fusion import POLICY as DEFAULT_FUSION
 from .plugins import PluginHost, one_line
@@ -65,6 +66,10 @@ class Options:
     calibration : str or None
         Path of the likelihood-ratio calibrators (``forensics calibrate``);
         None for those shipped with the tool.
+    jobs : int
+        Detectors run at once, each in its own process (``isolation="process"``
+        only; one at a time above :data:`~forensics_core.defaults.PARALLEL_MAX_PIXELS`).
+        Not recorded: it changes how long a run takes, not its findings.
     """
 
     detectors: Sequence[str] | None = None
@@ -76,6 +81,7 @@ class Options:
     case_id: str | None = None
     examiner: str | None = None
     calibration: str | None = None
+    jobs: int = 1
 
 
 def _now() -> str:
@@ -123,19 +129,19 @@ def resolve_params(host: PluginHost, options: Options) -> dict[str, dict[str, An
     }
 
 
-def run_detector(
-    host: PluginHost,
-    name: str,
-    evidence: Evidence,
-    params: dict[str, Any],
-    options: Options,
-    prior: Mapping[str, DetectorFinding] | None = None,
-) -> DetectorFinding:
-    """Run one detector with containment; always returns a finding.
+@dataclass(frozen=True)
+class _Job:
+    """A detector ready to run: what its finding is made of, and the call that runs it."""
 
-    ``prior`` holds findings of this run; the detector sees those its spec
-    ``uses``.
-    """
+    spec: DetectorSpec
+    plugin: str
+    params: dict[str, Any]
+    call: Callable[[], Any]
+
+
+def _job(host: PluginHost, name: str, evidence: Evidence, params: dict[str, Any],
+         prior: Mapping[str, DetectorFinding] | None) -> _Job | DetectorFinding:
+    """The detector's job, or its finding when it cannot or need not run (not installed, another format)."""
     registered = host.detectors.get(name)
     if registered is None:
         available = ", ".join(sorted(host.detectors)) or "none"
@@ -152,25 +158,25 @@ def run_detector(
             f"Not applied to a {fmt} file: the detector applies to {', '.join(spec.formats)} files, the formats its "
             f"null model was checked on.", None, None, None, {"formats": list(spec.formats)}, params, 0.0)
     analyze_impl = host.implementation("forensics_analyze", plugin)
-
+    if analyze_impl is None:
+        return DetectorFinding(spec.name, spec.version, plugin, Status.ERROR, "The detector failed; see error.",
+                               None, None, None, {}, params, 0.0,
+                               error=f"plugin {plugin!r} registers {name!r} but implements no forensics_analyze")
     seen = {n: f for n, f in (prior or {}).items() if n in spec.uses}
 
     def call() -> Any:
         return analyze_impl(detector=name, evidence=evidence, params=dict(params), prior=seen)
 
-    started = time.perf_counter()
-    printed: str | None = None
-    if analyze_impl is None:
-        outcome: tuple = ("error", f"plugin {plugin!r} registers {name!r} but implements no forensics_analyze", "")
-    elif options.isolation == "process" and can_fork():
-        outcome, printed = run_forked(call, options.timeout_s)
-    else:
-        outcome = run_threaded(call, options.timeout_s)
-    elapsed = round(time.perf_counter() - started, 3)
+    return _Job(spec, plugin, params, call)
+
+
+def _finding(job: _Job, outcome: tuple, printed: str | None, elapsed_s: float) -> DetectorFinding:
+    """The finding of a job from its contained outcome."""
+    spec, elapsed = job.spec, round(elapsed_s, 3)
 
     def failed(reason: str, details: dict[str, Any] | None = None) -> DetectorFinding:
-        return DetectorFinding(spec.name, spec.version, plugin, Status.ERROR, "The detector failed; see error.",
-                               None, None, None, details or {}, params, elapsed, error=reason, output=printed)
+        return DetectorFinding(spec.name, spec.version, job.plugin, Status.ERROR, "The detector failed; see error.",
+                               None, None, None, details or {}, job.params, elapsed, error=reason, output=printed)
 
     if outcome[0] == "error":
         return failed(outcome[1], {"traceback": outcome[2]} if outcome[2] else None)
@@ -178,8 +184,83 @@ def run_detector(
         result: DetectorResult = check_result(outcome[1])
     except MalformedResult as exc:
         return failed(f"malformed result: {exc}")
-    return DetectorFinding(spec.name, spec.version, plugin, result.status, result.summary, result.score,
-                           result.p_value, result.nfa, result.details, params, elapsed, output=printed)
+    return DetectorFinding(spec.name, spec.version, job.plugin, result.status, result.summary, result.score,
+                           result.p_value, result.nfa, result.details, job.params, elapsed, output=printed)
+
+
+def run_detector(
+    host: PluginHost,
+    name: str,
+    evidence: Evidence,
+    params: dict[str, Any],
+    options: Options,
+    prior: Mapping[str, DetectorFinding] | None = None,
+) -> DetectorFinding:
+    """Run one detector with containment; always returns a finding.
+
+    ``prior`` holds findings of this run; the detector sees those its spec
+    ``uses``.
+    """
+    job = _job(host, name, evidence, params, prior)
+    if isinstance(job, DetectorFinding):
+        return job
+    started = time.perf_counter()
+    printed: str | None = None
+    if options.isolation == "process" and can_fork():
+        outcome, printed = run_forked(job.call, options.timeout_s)
+    else:
+        outcome = run_threaded(job.call, options.timeout_s)
+    return _finding(job, outcome, printed, time.perf_counter() - started)
+
+
+def detector_jobs(options: Options, evidence: Evidence) -> int:
+    """How many detectors run at once on this photo: ``options.jobs``, or one above :data:`PARALLEL_MAX_PIXELS`."""
+    if options.isolation != "process" or not can_fork():
+        return 1
+    if evidence.info.width * evidence.info.height > PARALLEL_MAX_PIXELS:
+        return 1
+    return max(1, options.jobs)
+
+
+def run_detectors(host: PluginHost, order: Sequence[str], evidence: Evidence, params: Mapping[str, dict[str, Any]],
+                  options: Options, jobs: int = 1) -> dict[str, DetectorFinding]:
+    """Run the detectors of ``order`` (from :func:`run_order`), ``jobs`` at a time; a finding for each.
+
+    A detector starts once those it ``uses`` have finished, so it sees their
+    findings as it would in a run one at a time; the findings do not depend
+    on ``jobs``, only the elapsed times do.
+    """
+    done: dict[str, DetectorFinding] = {}
+    if jobs <= 1:
+        for name in order:
+            done[name] = run_detector(host, name, evidence, params.get(name, {}), options, prior=done)
+        return done
+    chosen = set(order)
+    pending = list(order)
+    running: dict[Child, tuple[str, _Job]] = {}
+
+    def ready(name: str) -> bool:
+        registered = host.detectors.get(name)
+        return all(dep in done for dep in (registered.spec.uses if registered else ()) if dep in chosen)
+
+    while pending or running:
+        while pending and len(running) < jobs:
+            # A cycle of ``uses`` is broken by the order, as run_order does.
+            name = next((n for n in pending if ready(n)), None if running else pending[0])
+            if name is None:
+                break
+            pending.remove(name)
+            job = _job(host, name, evidence, params.get(name, {}), done)
+            if isinstance(job, DetectorFinding):
+                done[name] = job
+            else:
+                running[Child(job.call, options.timeout_s)] = (name, job)
+        if running:
+            for child in wait_any(list(running)):
+                name, job = running.pop(child)
+                outcome, printed = child.collect()
+                done[name] = _finding(job, outcome, printed, time.monotonic() - child.started)
+    return done
 
 
 def _extra_metadata(host: PluginHost, evidence: Evidence, contained_s: float | None) -> dict[str, Any]:
@@ -248,9 +329,8 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
     contained = options.timeout_s if options.isolation == "process" else None
     host.prepare()
     evidence.info.extra_metadata = _extra_metadata(host, evidence, contained)
-    done: dict[str, DetectorFinding] = {}
-    for name in run_order(host, selected):
-        done[name] = run_detector(host, name, evidence, params.get(name, {}), options, prior=done)
+    done = run_detectors(host, run_order(host, selected), evidence, params, options,
+                         detector_jobs(options, evidence))
     findings = [done[name] for name in selected]
     verdict = fuse(host, options.fusion, findings, evidence)
     evaluate(findings, verdict, evidence.info, calibration_file(options.calibration))
@@ -289,6 +369,7 @@ def analyze(
     isolation: str = "process",
     case_id: str | None = None,
     examiner: str | None = None,
+    jobs: int = 1,
     **params: Mapping[str, Any],
 ) -> Findings:
     """Analyse one photo and return its findings.
@@ -301,7 +382,7 @@ def analyze(
         Detectors to run; default all installed.
     host : PluginHost, optional
         Loaded plugins; default: load the installed entry points.
-    timeout, max_pixels, fusion, isolation, case_id, examiner
+    timeout, max_pixels, fusion, isolation, case_id, examiner, jobs
         See :class:`Options`.
     **params : mapping
         Per-detector parameter overrides, keyed by detector name, e.g.
@@ -332,8 +413,10 @@ def analyze(
         detector_params={k: dict(v) for k, v in params.items()},
         case_id=case_id,
         examiner=examiner,
+        jobs=jobs,
     )
     return analyze_evidence(evidence, host, options)
 
 
-__all__ = ["Options", "analyze", "analyze_evidence", "fuse", "resolve_params", "run_detector", "run_order"]
+__all__ = ["Options", "analyze", "analyze_evidence", "detector_jobs", "fuse", "resolve_params", "run_detector",
+           "run_detectors", "run_order"]

@@ -14,7 +14,7 @@ import json
 import logging
 import os
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -25,7 +25,16 @@ from rich.markup import escape
 from . import ENTRY_POINT_GROUP, __version__
 from .calibration.command import calibrate_command
 from .containment import one_line
-from .defaults import DEFAULT_MAX_PIXELS, DEFAULT_TIMEOUT_S, ISOLATIONS, KEY_TYPES, PAPER_SIZES, PASSWORD_ENV
+from .defaults import (
+    DEFAULT_JOBS,
+    DEFAULT_MAX_PIXELS,
+    DEFAULT_TIMEOUT_S,
+    ISOLATIONS,
+    KEY_TYPES,
+    PAPER_SIZES,
+    PARALLEL_MAX_PIXELS,
+    PASSWORD_ENV,
+)
 from .plugins import PluginHost
 from .text import visible
 from .validation.command import validate_command
@@ -210,7 +219,6 @@ def _prepare_run(host: PluginHost, request: RunRequest) -> tuple[Options, Report
     from .calibration import CalibrationError
     from .calibration import load as load_calibration
     from .pipeline import ReportSettings
-    from .report.render import ReportOptions
 
     wanted_formats = _split_list(request.formats) or []
     bad = sorted(set(wanted_formats) - set(FORMATS))
@@ -236,6 +244,8 @@ def _prepare_run(host: PluginHost, request: RunRequest) -> tuple[Options, Report
     report_formats = tuple(f for f in REPORT_FORMATS if f in wanted_formats)
     report = None
     if report_formats:
+        from .report.render import ReportOptions
+
         record = None
         if request.validation_path is not None:
             from .validation import read_record
@@ -261,9 +271,12 @@ def _prepare_run(host: PluginHost, request: RunRequest) -> tuple[Options, Report
               help="Output folder; each photo gets OUT/<photo stem>/ (or <stem>-<SHA-256 prefix>/ when that holds "
                    "another photo's or other settings' outputs).")
 @click.option("--force", is_flag=True, help="Replace, as a whole, a bundle this photo already has in OUT.")
+@click.option("--jobs", type=click.IntRange(min=1), default=DEFAULT_JOBS, show_default=True,
+              help="Detectors run at once, each in its own process (one at a time on photos over "
+                   f"{PARALLEL_MAX_PIXELS // 1_000_000} MP, and with --isolation inline). The findings are the same.")
 @_run_options
 @click.pass_context
-def analyze(ctx, photos, out_dir, force, **run):
+def analyze(ctx, photos, out_dir, force, jobs, **run):
     """Analyse PHOTO... and write OUT/<photo stem>/findings.json for each,
     with the signed report (report.html, report.pdf, manifest.json and its
     signature) beside it.
@@ -284,6 +297,7 @@ def analyze(ctx, photos, out_dir, force, **run):
 
     host: PluginHost = ctx.find_root().command.host
     options, report = _prepare_run(host, RunRequest(**run))
+    options = replace(options, jobs=jobs)
 
     failures = 0
     used: set[str] = set()

@@ -14,8 +14,10 @@ import os
 import sys
 import tempfile
 import threading
+import time
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Collection
+from multiprocessing.connection import wait
 from typing import Any
 
 
@@ -68,38 +70,79 @@ def _child(call: Callable[[], Any], conn, sink: int) -> None:
         conn.close()
 
 
-def run_forked(call: Callable[[], Any], timeout_s: float) -> tuple[tuple, str | None]:
-    """The child's outcome, and what it printed (None when nothing)."""
-    ctx = multiprocessing.get_context("fork")
-    receiver, sender = ctx.Pipe(duplex=False)
-    sys.stdout.flush()
-    sys.stderr.flush()
-    with tempfile.TemporaryFile() as sink:
-        proc = ctx.Process(target=_child, args=(call, sender, sink.fileno()), daemon=True)
-        proc.start()
+class Child:
+    """A call running in a forked child, with its time limit; started on creation.
+
+    Several may run at once: :func:`wait_any` tells which have finished, and
+    :meth:`collect` takes each one's outcome. The parent stays single-threaded
+    while it forks, so no child inherits a lock another thread holds.
+    """
+
+    def __init__(self, call: Callable[[], Any], timeout_s: float) -> None:
+        ctx = multiprocessing.get_context("fork")
+        self.timeout_s = timeout_s
+        self.receiver, sender = ctx.Pipe(duplex=False)
+        sys.stdout.flush()
+        sys.stderr.flush()
+        self._sink = tempfile.TemporaryFile()
+        self._proc = ctx.Process(target=_child, args=(call, sender, self._sink.fileno()), daemon=True)
+        self._proc.start()
+        self.started = time.monotonic()
+        # Only the child may hold the sending end: its death must read as
+        # end-of-file here, which it would not if a later child inherited it.
         sender.close()
+
+    @property
+    def deadline(self) -> float:
+        """When the time limit ends, on :func:`time.monotonic`'s clock."""
+        return self.started + self.timeout_s
+
+    def wait(self) -> tuple[tuple, str | None]:
+        """Wait for this child alone, then :meth:`collect` it."""
+        self.receiver.poll(max(0.0, self.deadline - time.monotonic()))
+        return self.collect()
+
+    def collect(self) -> tuple[tuple, str | None]:
+        """The child's outcome, and what it printed (None when nothing); a child still running is killed."""
         try:
-            if not receiver.poll(timeout_s):
-                proc.kill()
-                outcome: tuple = ("error", f"timed out after {timeout_s:g} s", "")
+            if not self.receiver.poll(0):
+                self._proc.kill()
+                outcome: tuple = ("error", f"timed out after {self.timeout_s:g} s", "")
             else:
                 try:
-                    outcome = receiver.recv()
+                    outcome = self.receiver.recv()
                 except EOFError:
-                    proc.join(5)
-                    outcome = ("error", f"detector process died (exit code {proc.exitcode})", "")
+                    self._proc.join(5)
+                    outcome = ("error", f"detector process died (exit code {self._proc.exitcode})", "")
         finally:
-            receiver.close()
-            proc.join(5)
-            if proc.is_alive():
-                proc.kill()
-                proc.join()
-        size = os.fstat(sink.fileno()).st_size
-        sink.seek(0)
-        text = sink.read(OUTPUT_LIMIT).decode("utf-8", "replace")
-    if size > OUTPUT_LIMIT:
-        text += f"... ({size:,} bytes in all)"
-    return outcome, text or None
+            self.receiver.close()
+            self._proc.join(5)
+            if self._proc.is_alive():
+                self._proc.kill()
+                self._proc.join()
+        with self._sink as sink:
+            size = os.fstat(sink.fileno()).st_size
+            sink.seek(0)
+            text = sink.read(OUTPUT_LIMIT).decode("utf-8", "replace")
+        if size > OUTPUT_LIMIT:
+            text += f"... ({size:,} bytes in all)"
+        return outcome, text or None
+
+
+def wait_any(children: Collection[Child]) -> list[Child]:
+    """The children that have finished or reached their time limit, waiting until there is at least one."""
+    while True:
+        now = time.monotonic()
+        late = [c for c in children if c.deadline <= now]
+        ready = wait([c.receiver for c in children], timeout=0 if late else min(c.deadline for c in children) - now)
+        done = [c for c in children if c.receiver in ready or c.deadline <= time.monotonic()]
+        if done:
+            return done
+
+
+def run_forked(call: Callable[[], Any], timeout_s: float) -> tuple[tuple, str | None]:
+    """The child's outcome, and what it printed (None when nothing)."""
+    return Child(call, timeout_s).wait()
 
 
 def run_threaded(call: Callable[[], Any], timeout_s: float) -> tuple:

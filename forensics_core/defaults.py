@@ -1,13 +1,23 @@
 """Defaults and choices of the command-line options, shared with the modules that apply them.
 
-Nothing is imported here, so that ``forensics --help`` can show every
+Nothing heavy is imported here, so that ``forensics --help`` can show every
 option's default without loading the analysis, the report or the signing code.
 """
+
+import os
 
 #: Seconds a detector may run on one photo before it is stopped (``--timeout``).
 DEFAULT_TIMEOUT_S = 300.0
 #: How detectors are run: each in its own process, or in the command's (``--isolation``).
 ISOLATIONS = ("process", "inline")
+_CORES = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+#: Detectors run at once on one photo by ``forensics analyze`` (``--jobs``): one per core the
+#: process may use, at most four, since each one running adds its own working memory.
+DEFAULT_JOBS = max(1, min(_CORES, 4))
+#: Above this many pixels detectors run one at a time whatever ``--jobs`` says: each holds
+#: several float copies of the photo. Two at once took the peak from 696 to 798 MB on 12 MP
+#: (``benchmarks/memory.py --jobs``); one at a time keeps a 100 MP photo within 2.5 GB.
+PARALLEL_MAX_PIXELS = 24_000_000
 #: Largest photo taken in, in pixels (``--max-pixels``), against decompression bombs.
 DEFAULT_MAX_PIXELS = 150_000_000
 #: Paper sizes of the PDF report (``--paper``), as CSS names them.

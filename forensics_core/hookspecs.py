@@ -105,7 +105,10 @@ def forensics_analyze(
 
     The call runs in a child process with a time limit (``--timeout``), so it
     must not rely on state it changes in the parent; it must be deterministic
-    for the same input and parameters (fix any random seed).
+    for the same input and parameters (fix any random seed). Other detectors
+    may run at the same time in their own children (``forensics analyze
+    --jobs``), each limited to one BLAS thread; those named in ``uses`` have
+    finished before this call starts.
 
     Evidential strength: the report states likelihood ratios, and your
     ``p_value`` (or ``nfa``) becomes one only once your detector is

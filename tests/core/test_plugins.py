@@ -1,6 +1,7 @@
 """Plugin discovery and failure containment, through real entry points."""
 
 import json
+import time
 from importlib.metadata import EntryPoint
 from pathlib import Path
 
@@ -163,3 +164,23 @@ def test_a_metadata_hook_that_hangs_is_stopped_at_the_time_limit(photo):
     findings = analyze(photo, host=fixture_host("metadata_hanging", "good"), timeout=3)
     assert "timed out after 3 s" in findings.evidence.extra_metadata["metadata_hanging"]["error"]
     assert findings.detectors[0].status is Status.OK
+
+
+def test_detectors_run_at_once_give_the_findings_of_a_run_one_at_a_time(photo):
+    names = ["reader", "hanging", "good", "raising", "crashing"]
+    host = fixture_host(*names)
+
+    def comparable(findings):
+        return {d.name: (d.status, d.error, d.score, d.p_value, d.details.get("seen")) for d in findings.detectors}
+
+    one = analyze(photo, names, host=host, timeout=2, jobs=1)
+    started = time.monotonic()
+    three = analyze(photo, names, host=host, timeout=2, jobs=3)
+    # The hanging detector is stopped at its limit while the others run beside it.
+    assert time.monotonic() - started < 6
+    assert comparable(three) == comparable(one)
+    assert [d.name for d in three.detectors] == names
+    reader = by_name(three)["reader"]
+    assert reader.details["seen"] == {"good": by_name(three)["good"].details["mean_luma"]}
+    assert "timed out after 2 s" in by_name(three)["hanging"].error
+    assert "died" in by_name(three)["crashing"].error
