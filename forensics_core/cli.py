@@ -51,7 +51,7 @@ if TYPE_CHECKING:
 FORMATS = ("json", "html", "pdf")
 REPORT_FORMATS = ("html", "pdf")
 
-err_console = Console(stderr=True, highlight=False)
+err_console = Console(stderr=True, highlight=False, emoji=False)
 
 
 def _fail_line(subject: str, reason: str) -> None:
@@ -381,7 +381,7 @@ def batch_command(ctx, inputs, out_dir, workers, scheduler, recursive, force, **
     except BatchError as exc:
         _fail_line("batch", str(exc))
         ctx.exit(1)
-    print_summary(result, Console(highlight=False))
+    print_summary(result, Console(highlight=False, emoji=False))
     if result.failed:
         ctx.exit(1)
 
@@ -423,7 +423,7 @@ def plugins_command(ctx, as_json):
         cells = (r.name, dist, r.status, ", ".join(r.detectors) or "-",
                  ", ".join(h.removeprefix("forensics_") for h in r.hooks) or "-", r.error or "")
         table.add_row(*(escape(c) for c in cells))
-    Console(highlight=False).print(table)
+    Console(highlight=False, emoji=False).print(table)
 
 
 @cli.group("keys")

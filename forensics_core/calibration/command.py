@@ -12,7 +12,7 @@ from rich.table import Table
 from ..atomic import write_atomic
 from .model import CalibrationError
 
-console = Console(stderr=True, highlight=False)
+console = Console(stderr=True, highlight=False, emoji=False)
 
 
 @click.command("calibrate")
@@ -50,7 +50,7 @@ def calibrate_command(ctx, records, out_file, detectors):
         weights = ", ".join(f"{k} {v:+.2f}" for k, v in f.weights.items())
         table.add_row("fused", "", "", f"{f.intercept:+.3f}; {weights}", f"{f.lower:+.2f} .. {f.upper:+.2f}",
                       f"{f.cllr:.3f}", f"{f.cllr_min:.3f}")
-    Console(highlight=False, width=160).print(table)
+    Console(highlight=False, emoji=False, width=160).print(table)
     scored = sorted(c.detector for c in result.calibrators.values() if c.feature == "score")
     console.print(f"x = -log10 p (capped){'; x = score for ' + ', '.join(scored) if scored else ''}; "
                   f"calibration file: {out_file}")

@@ -11,7 +11,7 @@ from rich.table import Table
 
 from ..defaults import DEFAULT_COUNT, DEFAULT_SEED, DEFAULT_TIMEOUT_S
 
-console = Console(stderr=True, highlight=False)
+console = Console(stderr=True, highlight=False, emoji=False)
 
 
 @click.command("validate")
@@ -99,7 +99,7 @@ def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, time
         table.add_row("fused verdict" if m.name == VERDICT else m.name, auc, "—" if t5 is None else f"{t5:.2f}",
                       f"{op.tpr.value or 0:.2f} / {op.fpr.value or 0:.2f}", f"{declined:.0%}",
                       "—" if convicted is None or not convicted.n else f"{convicted.k}/{convicted.n}")
-    Console(highlight=False).print(table)
+    Console(highlight=False, emoji=False).print(table)
     from .page import PAGE_NAME
 
     click.echo(f"{out_dir / RECORD_NAME}\n{out_dir / PAGE_NAME}")

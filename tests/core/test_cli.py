@@ -119,6 +119,12 @@ def test_control_and_bidirectional_characters_in_names_are_shown_escaped(tmp_pat
     assert missing.returncode != 0 and "\x1b" not in missing.stderr and "gone\\x1b[2J.jpg" in missing.stderr
 
 
+def test_names_and_fingerprints_are_printed_verbatim_not_as_emoji(tmp_path):
+    # Rich would print ":cd:" as an emoji: a SHA-256 fingerprint holds ":CD:" one time in ten.
+    missing = run("analyze", tmp_path / "gone:cd:smile:.jpg", "--out", tmp_path / "out")
+    assert missing.returncode != 0 and "gone:cd:smile:.jpg" in missing.stderr
+
+
 def test_analyze_never_writes_into_another_photos_or_other_settings_bundle(tmp_path, data_dir):
     a, b = tmp_path / "A" / "photo.jpg", tmp_path / "B" / "photo.jpg"
     for path, source in ((a, "Canon_40D.jpg"), (b, "87_OSError.jpg")):
