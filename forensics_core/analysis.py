@@ -35,8 +35,8 @@ from .findings import (
     check_result,
     to_jsonable,
 )
-from .containment import Child, can_fork, run_forked, run_threaded, wait_any
-from .defaults import DEFAULT_MAX_PIXELS, DEFAULT_TIMEOUT_S, ISOLATIONS, PARALLEL_MAX_PIXELS
+from .containment import Child, can_fork, jobs_for, run_forked, run_threaded, wait_any
+from .defaults import DEFAULT_MAX_PIXELS, DEFAULT_TIMEOUT_S, ISOLATIONS
 from .evaluation import calibration_file, decide_by_lr, evaluate
 from .fusion import POLICY as DEFAULT_FUSION
 from .plugins import PluginHost, one_line
@@ -214,12 +214,10 @@ def run_detector(
 
 
 def detector_jobs(options: Options, evidence: Evidence) -> int:
-    """How many detectors run at once on this photo: ``options.jobs``, or one above :data:`PARALLEL_MAX_PIXELS`."""
-    if options.isolation != "process" or not can_fork():
+    """How many detectors run at once on this photo (:func:`~forensics_core.containment.jobs_for`; one inline)."""
+    if options.isolation != "process":
         return 1
-    if evidence.info.width * evidence.info.height > PARALLEL_MAX_PIXELS:
-        return 1
-    return max(1, options.jobs)
+    return jobs_for(evidence.info.width * evidence.info.height, options.jobs)
 
 
 def run_detectors(host: PluginHost, order: Sequence[str], evidence: Evidence, params: Mapping[str, dict[str, Any]],

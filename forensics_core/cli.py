@@ -14,7 +14,7 @@ import json
 import logging
 import os
 import sys
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -208,6 +208,7 @@ class RunRequest:
     tsa_url: str | None
     validation_path: Path | None
     calibration_path: Path | None
+    jobs: int = 1
 
 
 def _prepare_run(host: PluginHost, request: RunRequest) -> tuple[Options, ReportSettings | None]:
@@ -236,7 +237,8 @@ def _prepare_run(host: PluginHost, request: RunRequest) -> tuple[Options, Report
     options = Options(detectors=_split_list(request.detectors), timeout_s=request.timeout,
                       max_pixels=request.max_pixels, fusion=request.fusion, isolation=request.isolation,
                       detector_params=detector_params, case_id=request.case_id, examiner=request.examiner,
-                      calibration=str(request.calibration_path.resolve()) if request.calibration_path else None)
+                      calibration=str(request.calibration_path.resolve()) if request.calibration_path else None,
+                      jobs=request.jobs)
     try:
         resolve_params(host, options)
     except ValueError as exc:
@@ -256,7 +258,8 @@ def _prepare_run(host: PluginHost, request: RunRequest) -> tuple[Options, Report
                 raise click.BadParameter(one_line(exc), param_hint="--validation") from None
         report = ReportSettings(_signing_key(request.key_path, request.examiner, request.organisation), report_formats,
                                 ReportOptions(exhibit_id=request.exhibit_id, paper=request.paper, validation=record,
-                                              validation_source=f"the validation record {request.validation_path}" if record else None),
+                                              validation_source=f"the validation record {request.validation_path}" if record else None,
+                                              jobs=request.jobs),
                                 request.organisation, request.tsa_url)
     for name in options.detectors or []:
         if name not in host.detectors:
@@ -272,8 +275,9 @@ def _prepare_run(host: PluginHost, request: RunRequest) -> tuple[Options, Report
                    "another photo's or other settings' outputs).")
 @click.option("--force", is_flag=True, help="Replace, as a whole, a bundle this photo already has in OUT.")
 @click.option("--jobs", type=click.IntRange(min=1), default=DEFAULT_JOBS, show_default=True,
-              help="Detectors run at once, each in its own process (one at a time on photos over "
-                   f"{PARALLEL_MAX_PIXELS // 1_000_000} MP, and with --isolation inline). The findings are the same.")
+              help="Detectors, and report sections, run at once, each in its own process (detectors one at a time "
+                   f"on photos over {PARALLEL_MAX_PIXELS // 1_000_000} MP, and with --isolation inline). The findings "
+                   "and the report are the same.")
 @_run_options
 @click.pass_context
 def analyze(ctx, photos, out_dir, force, jobs, **run):
@@ -296,8 +300,7 @@ def analyze(ctx, photos, out_dir, force, jobs, **run):
     from .pipeline import ReportError, examine_photo, expected_files
 
     host: PluginHost = ctx.find_root().command.host
-    options, report = _prepare_run(host, RunRequest(**run))
-    options = replace(options, jobs=jobs)
+    options, report = _prepare_run(host, RunRequest(**run, jobs=jobs))
 
     failures = 0
     used: set[str] = set()

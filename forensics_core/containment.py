@@ -20,6 +20,8 @@ from collections.abc import Callable, Collection
 from multiprocessing.connection import wait
 from typing import Any
 
+from .defaults import PARALLEL_MAX_PIXELS
+
 
 
 class PluginFault(Exception):
@@ -138,6 +140,14 @@ def wait_any(children: Collection[Child]) -> list[Child]:
         done = [c for c in children if c.receiver in ready or c.deadline <= time.monotonic()]
         if done:
             return done
+
+
+def jobs_for(n_pixels: int, jobs: int) -> int:
+    """How many contained calls to run at once on a photo of ``n_pixels``: ``jobs``, or one where the
+    platform cannot fork or the photo is larger than :data:`~forensics_core.defaults.PARALLEL_MAX_PIXELS`."""
+    if not can_fork() or n_pixels > PARALLEL_MAX_PIXELS:
+        return 1
+    return max(1, jobs)
 
 
 def run_forked(call: Callable[[], Any], timeout_s: float) -> tuple[tuple, str | None]:

@@ -12,12 +12,15 @@ that says so, followed by its finding in generic form; the report still renders.
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import partial
 
 from jinja2 import StrictUndefined
 from jinja2.sandbox import ImmutableSandboxedEnvironment
 from markupsafe import Markup
 
+from ..containment import Child, PluginFault, jobs_for, wait_any
 from ..evidence import Evidence
 from ..findings import DetectorFinding
 from ..plugins import PluginHost, one_line
@@ -120,6 +123,18 @@ def _failed(finding: DetectorFinding, reason: str) -> DetectorSection:
 SECTION_TIMEOUT_S = 300.0
 
 
+def _from_outcome(finding: DetectorFinding, error: BaseException | None, value: object) -> DetectorSection | None:
+    """The section a hook's outcome gives, or None when the hook declined (returned None)."""
+    if error is not None:
+        return _failed(finding, f"its report hook raised {one_line(error)}")
+    if value is None:
+        return None
+    try:
+        return _render(finding, value)
+    except Exception as exc:  # a plugin's template or figures may fail in any way; contain it
+        return _failed(finding, f"its section could not be rendered: {one_line(exc)}")
+
+
 def section_for(host: PluginHost | None, finding: DetectorFinding, evidence: Evidence,
                 timeout_s: float | None = None) -> DetectorSection:
     """The section of one finding, from the plugin that registered its detector.
@@ -133,12 +148,42 @@ def section_for(host: PluginHost | None, finding: DetectorFinding, evidence: Evi
         return DetectorSection(finding, finding.name)
     for outcome in host.call_each("forensics_report_section", plugins=[finding.plugin], contained_s=timeout_s or SECTION_TIMEOUT_S,
                                   finding=finding, evidence=evidence):
-        if outcome.error is not None:
-            return _failed(finding, f"its report hook raised {one_line(outcome.error)}")
-        if outcome.value is None:
-            continue
-        try:
-            return _render(finding, outcome.value)
-        except Exception as exc:  # a plugin's template or figures may fail in any way; contain it
-            return _failed(finding, f"its section could not be rendered: {one_line(exc)}")
+        section = _from_outcome(finding, outcome.error, outcome.value)
+        if section is not None:
+            return section
     return DetectorSection(finding, finding.name)
+
+
+def sections_for(host: PluginHost | None, findings: Sequence[DetectorFinding], evidence: Evidence,
+                 timeout_s: float | None = None, jobs: int = 1) -> list[DetectorSection]:
+    """The sections of ``findings``, in their order, with ``jobs`` section hooks running at once.
+
+    Each hook runs contained as in :func:`section_for`, which this is with
+    ``jobs=1``, on large photos or where the platform cannot fork
+    (:func:`~forensics_core.containment.jobs_for`); the sections are the
+    same whatever ``jobs`` is.
+    """
+    jobs = jobs_for(evidence.info.width * evidence.info.height, jobs)
+    if host is None or jobs == 1:
+        return [section_for(host, f, evidence, timeout_s) for f in findings]
+    out: dict[int, DetectorSection] = {}
+    pending = list(enumerate(findings))
+    running: dict[Child, int] = {}
+    while pending or running:
+        while pending and len(running) < jobs:
+            i, finding = pending.pop(0)
+            impl = (host.implementation("forensics_report_section", finding.plugin)
+                    if finding.plugin in host.records else None)
+            if impl is None:
+                out[i] = DetectorSection(finding, finding.name)
+            else:
+                running[Child(partial(impl, finding=finding, evidence=evidence),
+                              timeout_s or SECTION_TIMEOUT_S)] = i
+        if running:
+            for child in wait_any(list(running)):
+                i = running.pop(child)
+                outcome, _ = child.collect()
+                error = PluginFault(outcome[1]) if outcome[0] == "error" else None
+                out[i] = (_from_outcome(findings[i], error, None if error else outcome[1])
+                          or DetectorSection(findings[i], findings[i].name))
+    return [out[i] for i in range(len(findings))]

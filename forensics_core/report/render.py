@@ -33,7 +33,7 @@ from ..text import visible
 from ..validation.record import ValidationRecord
 from . import images, wording
 from .error_rates import ErrorRates, given_error_rates, shipped_error_rates
-from .plugin_sections import DetectorSection, section_for
+from .plugin_sections import DetectorSection, sections_for
 
 TEMPLATES_PACKAGE = "forensics_core.templates"
 NOT_GIVEN = "not given"
@@ -79,6 +79,9 @@ class ReportOptions:
         synthetic ones (``make validate``), those that exist.
     validation_source : str or None
         Where ``validation`` was read from, as printed in the report.
+    jobs : int
+        Plugins' section hooks run at once, each in its own process; the
+        report is the same whatever it is.
     """
 
     exhibit_id: str | None = None
@@ -86,6 +89,7 @@ class ReportOptions:
     report_date: str | None = None
     validation: ValidationRecord | None = None
     validation_source: str | None = None
+    jobs: int = 1
 
 
 @dataclass
@@ -328,7 +332,8 @@ def render_html(findings: Findings, evidence: Evidence, signature: SignatureInfo
         Already built sections (otherwise built here).
     """
     css = _stylesheet(options.paper)
-    built = list(sections) if sections is not None else [section_for(host, f, evidence) for f in findings.detectors]
+    built = (list(sections) if sections is not None
+             else sections_for(host, findings.detectors, evidence, jobs=options.jobs))
     thumbnail = images.thumbnail_jpeg(evidence.thumbnail)
     ev = findings.evidence
     context = {

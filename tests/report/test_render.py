@@ -191,13 +191,24 @@ def test_a_failing_section_is_reported_and_the_report_still_renders(tmp_path, pl
     assert pdf.startswith(b"%PDF")
 
 
+@pytest.mark.parametrize("jobs", [1, 2])
 @pytest.mark.parametrize("plugin, reason", [("section_hanging", "timed out after 3 s"),
                                             ("section_exiting", "process died (exit code 0)")])
-def test_a_section_hook_that_hangs_or_ends_its_process_costs_only_its_section(tmp_path, monkeypatch, plugin, reason):
+def test_a_section_hook_that_hangs_or_ends_its_process_costs_only_its_section(tmp_path, monkeypatch, plugin, reason,
+                                                                              jobs):
     monkeypatch.setattr("forensics_core.report.plugin_sections.SECTION_TIMEOUT_S", 3.0)
-    report = render(hostile_jpeg(tmp_path / "p.jpg"), plugin, "sectioned")
+    report = render(hostile_jpeg(tmp_path / "p.jpg"), plugin, "sectioned", jobs=jobs)
     assert f"{plugin}: report section failed" in report.html and reason in report.html
     assert "Sectioned fixture detector" in report.html
+
+
+def test_sections_made_at_once_are_those_made_one_at_a_time(tmp_path):
+    photo = hostile_jpeg(tmp_path / "p.jpg")
+    one, two = (render(photo, "sectioned", "no_section", "section_raising", report_date="2026-01-01T00:00:00Z",
+                       jobs=jobs) for jobs in (1, 2))
+    assert [s.title for s in two.sections] == [s.title for s in one.sections]
+    assert [s.failure for s in two.sections] == [s.failure for s in one.sections]
+    assert [str(s.body) for s in two.sections] == [str(s.body) for s in one.sections]
 
 
 @pytest.mark.parametrize("paper, size", [("a4", "595.276 x 841.89"), ("letter", "612 x 792")])
