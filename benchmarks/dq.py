@@ -6,8 +6,8 @@ A synthetic scene of :mod:`forensics_plugins.dq.synth` is saved at JPEG 75,
 decoded, given a piece of another scene and saved at JPEG 92, once, into
 ``benchmarks/out/``. Each run analyses it in a fresh process. Printed: median
 and range of each stage (decode = intake with hashing; the detector, which
-reads the coefficients itself; the report's vote map, which recomputes the
-votes) and of the peak resident memory (``VmHWM``; ``baseline`` =
+reads the coefficients itself; the report's vote map, drawn from the votes
+the finding carries) and of the peak resident memory (``VmHWM``; ``baseline`` =
 interpreter and libraries).
 """
 
@@ -22,9 +22,10 @@ OUT = Path(__file__).resolve().parent / "out"
 _CHILD = r"""
 import forensics_core
 from forensics_core.evidence import load_evidence
-from forensics_plugins.dq.detector import analyse, votes
+from forensics_plugins.dq.detector import analyse
 from forensics_plugins.dq.spec import DEFAULT_PARAMS
 from forensics_plugins.dq.figures import votes_png
+from forensics_plugins.dq.votes import decode_votes
 base = hwm_mb()
 t0 = time.perf_counter()
 ev = load_evidence(sys.argv[1])
@@ -32,8 +33,7 @@ luma = ev.luma
 t1 = time.perf_counter()
 result = analyse(ev, DEFAULT_PARAMS)
 t2 = time.perf_counter()
-found = votes(ev, DEFAULT_PARAMS)
-votes_png(luma, found["informative"], found["single"], result.details)
+votes_png(luma, *decode_votes(result.details["block_votes"]), result.details)
 t3 = time.perf_counter()
 stages = {"decode+hash+luma": t1 - t0, "detector": t2 - t1, "report vote map": t3 - t2}
 print(json.dumps({"stages": stages, "peak_mb": hwm_mb(), "baseline_mb": base, "score": result.score}))

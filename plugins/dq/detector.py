@@ -27,7 +27,7 @@ from forensics_core import DetectorResult, Evidence, Status
 from .coefficients import ZIGZAG, LumaCoefficients, read_luma
 from .primary import Primary, estimate
 from .regions import overdispersion, scan
-from .votes import activity, block_log_ratio, null_rates
+from .votes import activity, block_log_ratio, encode_votes, null_rates
 
 
 
@@ -126,6 +126,7 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
         "n_tests": n_tests,
         "windows": [asdict(w) for w in windows if w.log10_nfa < 0][:int(params["max_windows_listed"])],
         "best": None if best is None else asdict(best),
+        "block_votes": encode_votes(informative, single),
         "elapsed_s": round(time.perf_counter() - t, 4),
     })
     primary = ", ".join(f"{r['q1']}" for r in table if r["used"])

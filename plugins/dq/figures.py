@@ -1,7 +1,7 @@
 """The dq figure: the photo with each block's vote and the windows that lack the earlier quantisation.
 
-Drawn from the photo and the block maps the detector recomputes
-(deterministically, seeded); the photo is reduced first.
+Drawn from the photo and the block votes the finding carries
+(:func:`.votes.encode_votes`); the photo is reduced first.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ def votes_png(luma: np.ndarray, informative: np.ndarray, single: np.ndarray, det
     luma : ndarray, shape (H, W)
         In [0, 1].
     informative, single : ndarray of bool, shape (h, w)
-        Block maps of :func:`.detector.votes`.
+        Block votes (:func:`.votes.decode_votes`).
     details : mapping
         The finding's details (its ``windows`` are outlined).
     """
@@ -54,5 +54,6 @@ def votes_png(luma: np.ndarray, informative: np.ndarray, single: np.ndarray, det
         side = 8 * win["size"] * k
         draw.rectangle([x0, y0, x0 + side, y0 + side], outline=WINDOW, width=2)
     buf = io.BytesIO()
-    img.save(buf, format="PNG", optimize=True)
+    # optimize=True tries every zlib setting: 3 s on a 1200-pixel figure for a few per cent of its size.
+    img.save(buf, format="PNG")
     return buf.getvalue()
