@@ -14,7 +14,7 @@ import os
 import platform
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import datetime, timezone
 from importlib.metadata import PackageNotFoundError, version
 from typing import Any
@@ -70,6 +70,9 @@ class Options:
         Detectors run at once, each in its own process (``isolation="process"``
         only; one at a time above :data:`~forensics_core.defaults.PARALLEL_MAX_PIXELS`).
         Not recorded: it changes how long a run takes, not its findings.
+    resolved : bool
+        Set by :meth:`resolve`: ``detectors`` names every detector to run and
+        ``detector_params`` holds each one's complete parameters.
     """
 
     detectors: Sequence[str] | None = None
@@ -82,6 +85,23 @@ class Options:
     examiner: str | None = None
     calibration: str | None = None
     jobs: int = 1
+    resolved: bool = False
+
+    def resolve(self, host: PluginHost) -> Options:
+        """These options with the detectors named and their parameters resolved (:func:`resolve_params`).
+
+        Done once for a run, however many photos it takes; resolving resolved
+        options returns them unchanged.
+
+        Raises
+        ------
+        ValueError
+            As :func:`resolve_params`.
+        """
+        if self.resolved:
+            return self
+        selected = list(self.detectors) if self.detectors is not None else sorted(host.detectors)
+        return replace(self, detectors=selected, detector_params=resolve_params(host, self), resolved=True)
 
 
 def _now() -> str:
@@ -322,8 +342,9 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
     """Run the selected detectors on already loaded evidence."""
     if options.isolation not in ISOLATIONS:
         raise ValueError(f"isolation must be one of {', '.join(ISOLATIONS)}")
-    params = resolve_params(host, options)
-    selected = list(options.detectors) if options.detectors is not None else sorted(host.detectors)
+    options = options.resolve(host)
+    params = options.detector_params
+    selected = list(options.detectors)
     contained = options.timeout_s if options.isolation == "process" else None
     host.prepare()
     evidence.info.extra_metadata = _extra_metadata(host, evidence, contained)
@@ -344,7 +365,7 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
             "max_pixels": options.max_pixels,
             "fusion": options.fusion,
             "isolation": options.isolation,
-            "detector_params": params,
+            "detector_params": {name: dict(values) for name, values in params.items()},
             "case_id": options.case_id,
             "examiner": options.examiner,
             "calibration": options.calibration,

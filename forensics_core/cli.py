@@ -216,7 +216,7 @@ def _prepare_run(host: PluginHost, request: RunRequest) -> tuple[Options, Report
 
     Raises ``click.BadParameter`` (exit status 2) for wrong usage.
     """
-    from .analysis import Options, resolve_params
+    from .analysis import Options
     from .calibration import CalibrationError
     from .calibration import load as load_calibration
     from .pipeline import ReportSettings
@@ -240,7 +240,7 @@ def _prepare_run(host: PluginHost, request: RunRequest) -> tuple[Options, Report
                       calibration=str(request.calibration_path.resolve()) if request.calibration_path else None,
                       jobs=request.jobs)
     try:
-        resolve_params(host, options)
+        options = options.resolve(host)
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="--param") from None
     report_formats = tuple(f for f in REPORT_FORMATS if f in wanted_formats)

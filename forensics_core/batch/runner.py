@@ -18,7 +18,6 @@ from rich.progress import (BarColumn, MofNCompleteColumn, Progress, ProgressColu
 from rich.table import Table
 from rich.text import Text
 
-from ..analysis import resolve_params
 from ..plugins import PluginHost
 from ..signing import ExaminerKey
 from .cluster import ClusterError, DaskPool
@@ -229,11 +228,10 @@ def run_batch(request: BatchRequest, host: PluginHost, key: ExaminerKey | None, 
     """
     started = time.perf_counter()
     out_dir = request.out_dir
-    options = request.settings.options
-    selected = list(options.detectors) if options.detectors is not None else sorted(host.detectors)
-    settings = replace(request.settings, options=replace(options, detectors=selected))
+    options = request.settings.options.resolve(host)
+    settings = replace(request.settings, options=options)
     expected = Expected(settings.report_formats,
-                        expected_parameters(selected, resolve_params(host, settings.options), options.fusion,
+                        expected_parameters(list(options.detectors), options.detector_params, options.fusion,
                                             options.case_id, options.examiner),
                         settings.report_options.exhibit_id)
     with ExitStack() as stack:
@@ -282,7 +280,7 @@ def run_batch(request: BatchRequest, host: PluginHost, key: ExaminerKey | None, 
             rows = [batch.rows[p.path] for p in plan.photos]
             elapsed = round(time.perf_counter() - started, 3)
             run = _run_record(request, settings, pool_name, elapsed, batch.peaks)
-            json_path, csv_path = write_summary(out_dir, rows, detector_names(rows, selected), run)
+            json_path, csv_path = write_summary(out_dir, rows, detector_names(rows, list(options.detectors)), run)
     return BatchResult(rows, json_path, csv_path, elapsed, pool_name, batch.peaks)
 
 

@@ -42,7 +42,7 @@ def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, time
     each detector declined, and whether its p-values hold on the authentic
     photos (their empirical CDF and the photos it convicts).
     """
-    from ..analysis import Options, resolve_params
+    from ..analysis import Options
     from . import RECORD_NAME, SYNTHETIC, SuiteError, default_workers, read_suite, synthetic_suite, validate
     from .record import VERDICT
 
@@ -50,7 +50,7 @@ def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, time
     names = [d.strip() for d in detectors.split(",") if d.strip()] if detectors else None
     options = Options(detectors=names, timeout_s=timeout, fusion=fusion)
     try:
-        resolve_params(host, options)
+        options = options.resolve(host)
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="--detectors") from None
     unknown = sorted(set(names or ()) - set(host.detectors))

@@ -10,7 +10,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from .. import __version__
-from ..analysis import Options, environment, resolve_params
+from ..analysis import Options, environment
 from ..fusion import ALPHA
 from ..atomic import write_atomic
 from ..plugins import PluginHost, one_line
@@ -73,7 +73,8 @@ def validate(
 ) -> ValidationRecord:
     """Analyse every case of ``suite``, then write ``validation.json`` and ``validation.html`` into ``out``."""
     started = time.perf_counter()
-    params = resolve_params(host, options)
+    options = options.resolve(host)
+    params = options.detector_params
     results = run_cases(suite.cases, host, options, out / "findings", workers, on_done)
     versions = {n: d.spec.version for n, d in host.detectors.items()}
     rows = case_rows(results)

@@ -2,6 +2,8 @@
 
 import json
 import time
+
+import pytest
 from importlib.metadata import EntryPoint
 from pathlib import Path
 
@@ -184,3 +186,18 @@ def test_detectors_run_at_once_give_the_findings_of_a_run_one_at_a_time(photo):
     assert reader.details["seen"] == {"good": by_name(three)["good"].details["mean_luma"]}
     assert "timed out after 2 s" in by_name(three)["hanging"].error
     assert "died" in by_name(three)["crashing"].error
+
+
+def test_options_are_resolved_once_for_a_run(photo):
+    from forensics_core.analysis import Options, analyze_evidence
+    from forensics_core.evidence import load_evidence
+
+    host = fixture_host("good")
+    options = Options(detector_params={"good": {"level": 3}}).resolve(host)
+    assert options.resolved and options.detectors == ["good"] and options.detector_params == {"good": {"level": 3}}
+    assert options.resolve(host) is options
+    findings = analyze_evidence(load_evidence(photo), host, options)
+    assert findings.parameters["detector_params"] == {"good": {"level": 3}}
+    assert findings.detectors[0].details["level"] == 3
+    with pytest.raises(ValueError, match="no parameter levle"):
+        Options(detector_params={"good": {"levle": 1}}).resolve(host)
