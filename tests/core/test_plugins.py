@@ -2,11 +2,10 @@
 
 import json
 import time
-
-import pytest
 from importlib.metadata import EntryPoint
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 from plugin_hosts import fixture_host
 
