@@ -23,7 +23,6 @@ from typing import Any
 from .defaults import PARALLEL_MAX_PIXELS
 
 
-
 class PluginFault(Exception):
     """A contained call that failed in its child (it raised, timed out or died); the message is already one line."""
 
@@ -88,11 +87,17 @@ class Child:
         sys.stderr.flush()
         self._sink = tempfile.TemporaryFile()
         self._proc = ctx.Process(target=_child, args=(call, sender, self._sink.fileno()), daemon=True)
-        self._proc.start()
+        try:
+            self._proc.start()
+        except BaseException:
+            self.receiver.close()
+            self._sink.close()
+            raise
+        finally:
+            # Only the child may hold the sending end: its death must read as
+            # end-of-file here, which it would not if a later child inherited it.
+            sender.close()
         self.started = time.monotonic()
-        # Only the child may hold the sending end: its death must read as
-        # end-of-file here, which it would not if a later child inherited it.
-        sender.close()
 
     @property
     def deadline(self) -> float:
@@ -143,8 +148,11 @@ def wait_any(children: Collection[Child]) -> list[Child]:
 
 
 def jobs_for(n_pixels: int, jobs: int) -> int:
-    """How many contained calls to run at once on a photo of ``n_pixels``: ``jobs``, or one where the
-    platform cannot fork or the photo is larger than :data:`~forensics_core.defaults.PARALLEL_MAX_PIXELS`."""
+    """How many contained calls run at once on a photo of ``n_pixels``.
+
+    ``jobs``, or one where the platform cannot fork or the photo is larger
+    than :data:`~forensics_core.defaults.PARALLEL_MAX_PIXELS`.
+    """
     if not can_fork() or n_pixels > PARALLEL_MAX_PIXELS:
         return 1
     return max(1, jobs)
