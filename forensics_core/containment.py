@@ -9,6 +9,7 @@ unavailable, a daemon thread with a time limit is the fallback.
 from __future__ import annotations
 
 import faulthandler
+import gc
 import multiprocessing
 import os
 import sys
@@ -87,6 +88,10 @@ class Child:
         sys.stderr.flush()
         self._sink = tempfile.TemporaryFile()
         self._proc = ctx.Process(target=_child, args=(call, sender, self._sink.fileno()), daemon=True)
+        # The child's garbage collector would otherwise walk, and so copy, every
+        # page of objects it shares with the parent; frozen, they are skipped
+        # there, and the parent takes them back at once.
+        gc.freeze()
         try:
             self._proc.start()
         except BaseException:
@@ -94,6 +99,7 @@ class Child:
             self._sink.close()
             raise
         finally:
+            gc.unfreeze()
             # Only the child may hold the sending end: its death must read as
             # end-of-file here, which it would not if a later child inherited it.
             sender.close()
