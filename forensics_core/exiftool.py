@@ -11,12 +11,13 @@ says so.
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import subprocess
 from dataclasses import dataclass
-from functools import lru_cache
 
 ARGUMENTS = ("-json", "-G1", "-a", "-u", "-n")
+_VERSION = re.compile(rb'"ExifTool:ExifToolVersion":\s*"?([0-9][0-9.]*)')
 # Groups that describe ExifTool's own run or the standard-input pseudo-file,
 # not the evidence.
 _SKIPPED_GROUPS = frozenset({"ExifTool", "System"})
@@ -39,7 +40,7 @@ class ExifToolResult:
     Attributes
     ----------
     version : str or None
-        ExifTool's version, None when it is not installed.
+        ExifTool's version as it states it, None when it gave no reading.
     tags : list of ExifToolTag
         In ExifTool's order, at most :data:`MAX_TAGS`.
     error : str or None
@@ -49,20 +50,6 @@ class ExifToolResult:
     version: str | None
     tags: list[ExifToolTag]
     error: str | None = None
-
-
-@lru_cache(maxsize=1)
-def version() -> str | None:
-    """ExifTool's version string, or None when ``exiftool`` is not on the PATH or does not answer."""
-    exe = shutil.which("exiftool")
-    if exe is None:
-        return None
-    try:
-        done = subprocess.run([exe, "-ver"], capture_output=True, timeout=30, check=False)
-    except (OSError, subprocess.SubprocessError):
-        return None
-    text = done.stdout.decode("ascii", "replace").strip()
-    return text if done.returncode == 0 and text else None
 
 
 def read(data: bytes, timeout_s: float = 30.0) -> ExifToolResult:
@@ -81,17 +68,16 @@ def read(data: bytes, timeout_s: float = 30.0) -> ExifToolResult:
         With ``error`` set (and no tags) when ExifTool is absent, fails, times
         out or prints something that is not its JSON.
     """
-    found = version()
     exe = shutil.which("exiftool")
-    if found is None or exe is None:
+    if exe is None:
         return ExifToolResult(None, [], "ExifTool is not installed")
     try:
         done = subprocess.run([exe, *ARGUMENTS, "-"], input=data, capture_output=True, timeout=timeout_s,
                               check=False)
     except subprocess.TimeoutExpired:
-        return ExifToolResult(found, [], f"ExifTool did not finish within {timeout_s:g} s")
+        return ExifToolResult(None, [], f"ExifTool did not finish within {timeout_s:g} s")
     except OSError as exc:
-        return ExifToolResult(found, [], f"ExifTool could not be run: {exc.strerror or exc}")
+        return ExifToolResult(None, [], f"ExifTool could not be run: {exc.strerror or exc}")
     try:
         parsed = json.loads(done.stdout.decode("utf-8", "replace"))
         record = parsed[0] if isinstance(parsed, list) and parsed and isinstance(parsed[0], dict) else None
@@ -99,7 +85,7 @@ def read(data: bytes, timeout_s: float = 30.0) -> ExifToolResult:
         record = None
     if record is None:
         first = done.stderr.decode("utf-8", "replace").strip().splitlines()[:1]
-        return ExifToolResult(found, [], f"ExifTool read nothing (exit {done.returncode}"
+        return ExifToolResult(None, [], f"ExifTool read nothing (exit {done.returncode}"
                                          f"{': ' + first[0][:200] if first else ''})")
     tags = []
     for key, value in record.items():
@@ -109,4 +95,7 @@ def read(data: bytes, timeout_s: float = 30.0) -> ExifToolResult:
         tags.append(ExifToolTag(group, name, value))
         if len(tags) >= MAX_TAGS:
             break
-    return ExifToolResult(found, tags)
+    # The version as ExifTool printed it (12.60 stays 12.60), read from the
+    # same output rather than from a second run of ``exiftool -ver``.
+    stated = _VERSION.search(done.stdout)
+    return ExifToolResult(stated.group(1).decode("ascii") if stated else "of unstated version", tags)
