@@ -5,7 +5,7 @@ JPEGInterchangeFormat 0x0201 and JPEGInterchangeFormatLength 0x0202, offsets
 counted from the TIFF header; Exif 2.32). Every number that leads to it comes
 from the evidence, so the reading is strict: find the EXIF block in the file
 (:func:`exif_block`), walk the TIFF structure to IFD1 with every offset
-bounds-checked (:func:`thumbnail_pointer`, :func:`thumbnail_bytes`), and
+bounds-checked (:func:`thumbnail_pointer`), and
 decode the thumbnail as a JPEG only, under a size and pixel limit, with
 Pillow's decompression-bomb warning as an error (:func:`decode`).
 :func:`read_thumbnail` does all of it for :func:`.evidence.load_evidence`
@@ -272,29 +272,6 @@ def _stored(tiff: bytes, offset: int, length: int, max_bytes: int) -> bytes:
     if blob[:2] != b"\xff\xd8":
         raise ThumbnailError("the bytes IFD1 points to are not a JPEG stream")
     return blob
-
-
-def thumbnail_bytes(tiff: bytes, max_bytes: int) -> bytes | None:
-    """The JPEG thumbnail that IFD1 points to.
-
-    None when there is no IFD1 or it names no JPEG thumbnail; empty bytes when
-    it names one of length 0 (software that drops the thumbnail may leave that).
-
-    Parameters
-    ----------
-    tiff : bytes
-        The EXIF TIFF structure (from :func:`exif_block`).
-    max_bytes : int
-        Larger thumbnails are refused: the standard limits them to 64 kB.
-
-    Raises
-    ------
-    ThumbnailError
-        On a malformed header or IFD, offsets outside the block, an oversized
-        thumbnail or one that is not a JPEG stream.
-    """
-    pointer = thumbnail_pointer(tiff)
-    return None if pointer is None else _stored(tiff, *pointer, max_bytes)
 
 
 def decode(blob: bytes, max_pixels: int) -> Image.Image:

@@ -1,6 +1,7 @@
 """The EXIF (IFD1) thumbnail read once at intake: safe parsing of hostile bytes, and an intake that never fails on it."""
 
 import io
+import re
 import struct
 from pathlib import Path
 
@@ -19,7 +20,6 @@ from forensics_core.thumbnail import (
     decode,
     exif_block,
     read_thumbnail,
-    thumbnail_bytes,
 )
 
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -77,7 +77,7 @@ def test_exif_block_found_after_other_segments():
     data = _jpeg(img, _exif(_thumb(img)), icc_profile=b"\x00" * 200)
     tiff = exif_block(data, "JPEG")
     assert tiff[:2] in (b"II", b"MM")
-    assert thumbnail_bytes(tiff, MAX_BYTES)[:2] == b"\xff\xd8"
+    assert read_thumbnail(data, "JPEG").jpeg[:2] == b"\xff\xd8"
 
 
 def test_exif_block_absent_or_malformed():
@@ -110,25 +110,23 @@ def test_png_exif_chunk():
     ({"ifd1_offset": 3}, "outside"),
 ])
 def test_bogus_thumbnail_pointers_are_refused(lie, message):
-    block = _exif(_thumb(_photo()), **lie)
-    with pytest.raises(ThumbnailError, match=message):
-        thumbnail_bytes(_tiff(block), MAX_BYTES)
+    found = read_thumbnail(_jpeg(_photo(), _exif(_thumb(_photo()), **lie)), "JPEG")
+    assert found.pixels is None and re.search(message, found.error)
 
 
 def test_zero_length_and_missing_ifd1():
-    assert thumbnail_bytes(_tiff(_exif(b"", length=0)), MAX_BYTES) == b""
+    empty = read_thumbnail(_jpeg(_photo(), _exif(b"", length=0)), "JPEG")
+    assert empty.error == "IFD1 points to a thumbnail of 0 bytes" and not empty.named
     exif = Image.Exif()
     exif[0x010F] = "Canon"
-    assert thumbnail_bytes(_tiff(exif.tobytes()), MAX_BYTES) is None
+    assert read_thumbnail(_jpeg(_photo(), exif.tobytes()), "JPEG") is None
 
 
 def test_huge_entry_count_and_bad_header():
     tiff = bytearray(_tiff(_exif(_thumb(_photo()))))
     struct.pack_into(">H", tiff, 8, 60000)
-    with pytest.raises(ThumbnailError, match="entries"):
-        thumbnail_bytes(bytes(tiff), MAX_BYTES)
-    with pytest.raises(ThumbnailError, match="TIFF header"):
-        thumbnail_bytes(b"XX\x00*\x00\x00\x00\x08", MAX_BYTES)
+    assert "entries" in read_thumbnail(_jpeg(_photo(), b"Exif\x00\x00" + bytes(tiff)), "JPEG").error
+    assert "TIFF header" in read_thumbnail(_jpeg(_photo(), b"Exif\x00\x00XX\x00*\x00\x00\x00\x08"), "JPEG").error
 
 
 def test_decode_limits():
