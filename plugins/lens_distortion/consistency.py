@@ -8,8 +8,9 @@ Two layers are reported:
   errors (:func:`paper_rules`);
 * the default test: one camera model ``(k1, k2, cx, cy)`` fitted robustly to
   all lines together, each line with its own nuisance ``(theta, rho)``; then
-  every line's and every compact group of lines' departure from it, and an
-  image-level p-value (:func:`assess`).
+  every line's departure from it, and whether a compact region of lines
+  follows another lens (:mod:`.regions`), which gives the image-level
+  p-value (:func:`assess`).
 
 Noise model, and why (the stderrs decide false alarms). Measured on real
 photos, not assumed: on 2 772 informative lines of 64 authentic photos
@@ -43,13 +44,6 @@ curve), and how much varies from edge to edge. So:
    that t, and the reported ``z`` is its normal equivalent
    (``Phi^-1`` of the t tail), which is N(0, 1) under the null.
 
-6. Neighbouring lines are not independent: a region can depart as a whole
-   (corners where the radial polynomial fits worst, one curved object with
-   edges in several directions). A compact group's common departure
-   carries a shared regional error of sd ``TAU_REGION`` and the same heavy
-   tail; fitted on the 1 975 candidate groups of those photos (each photo
-   weighted equally), ``TAU_REGION = 0.0029`` with 1.3 degrees of freedom.
-
 ``TAU_K1 = 0.0044``, ``BOW_REL = 1.6e-4`` and ``DOF = 1.3`` are the
 maximum-likelihood fit of that t model to the lines above (89-98 % of the
 normal-equivalent ``z`` within +-1.96 in each leverage quartile). With the
@@ -58,8 +52,8 @@ photos lie within +-1.96 and 0.1 % beyond +-3 (benchmarks/lens_real.py
 re-measures it). A
 relative bow of 1.6e-4 is 0.16 px RMS on a 1000 px edge. ``DOF`` near 1
 means nearly Cauchy tails: one line, however far it departs, is never
-strong evidence, which is why the splice test rests on groups
-(:func:`assess`).
+strong evidence, which is why the splice test rests on regions whose lines
+agree with another lens (:mod:`.regions`).
 
 References
 ----------
@@ -74,20 +68,20 @@ References
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import least_squares
-from scipy.special import chdtrc, ndtri, stdtr
+from scipy.special import ndtri, stdtr
 
 from .geometry import norm_scale, to_normalised
-from .error_model import BOW_REL, DOF, TAU_K1, TAU_REGION
+from .error_model import BOW_REL, DOF, TAU_K1
 from .k1 import LineK1, fit_lines, fit_lines_multistart
+from .regions import REGION_MIN_LENGTH, RegionTest, region_test
 
 __all__ = [
     "ConsistencyResult",
     "GlobalModel",
-    "GroupDeparture",
     "LineDeparture",
     "PaperRules",
     "assess",
@@ -95,17 +89,7 @@ __all__ = [
     "BOW_REL",
     "DOF",
     "TAU_K1",
-    "TAU_REGION",
 ]
-
-# Curved objects (bezels, pipes, arches, mouldings) come as bundles of nearly
-# parallel edges that bow together; lines from another lens bend together
-# whatever their direction. A group must hold two lines at least this far
-# apart in direction.
-_MIN_GROUP_SPREAD_DEG = 30.0
-# A pasted piece is compact: group members lie within this normalised radius
-# of the first member's midpoint.
-_GROUP_RADIUS = 0.5
 
 _TUKEY_C = 4.685  # biweight tuning constant: 95% efficiency under Gaussian noise
 _CAUCHY_C = 2.385  # Cauchy tuning constant: 95% efficiency under Gaussian noise
@@ -245,41 +229,6 @@ class LineDeparture:
 
 
 @dataclass(frozen=True)
-class GroupDeparture:
-    """A compact group of lines that may share one ``k1`` different from the model.
-
-    The group's common departure is the generalised-least-squares mean of
-    its members' ``delta_k1`` (their covariance includes the shared
-    global-model uncertainty), reported for the examiner; the test itself is
-    the weakest-member p-value of :func:`assess`.
-
-    Attributes
-    ----------
-    line_ids : tuple of int
-    delta_k1, delta_k1_stderr, z : float
-        Common departure, its standard error and their ratio.
-    p_value : float
-        The larger of ``2 (max_i p_i / 2)**size`` (1 unless all members
-        depart in one direction) and the regional Student-t p-value of the
-        common departure (uncorrected; :func:`assess`).
-    heterogeneity_p : float
-        Chi-square p-value of the members' scatter about the common
-        departure: small means the members do not agree with each other.
-    flagged : bool
-        Significant after the image-level Bonferroni correction and the
-        members agree with each other (``heterogeneity_p >= alpha``).
-    """
-
-    line_ids: tuple[int, ...]
-    delta_k1: float
-    delta_k1_stderr: float
-    z: float
-    p_value: float
-    heterogeneity_p: float
-    flagged: bool
-
-
-@dataclass(frozen=True)
 class ConsistencyResult:
     """Outcome of :func:`assess`.
 
@@ -293,18 +242,19 @@ class ConsistencyResult:
         ``None`` when inconclusive.
     departures : tuple of LineDeparture
         One per input line, in input order.
-    groups : tuple of GroupDeparture
-        Every candidate group tested.
+    region : RegionTest or None
+        The region that departs most from one lens (line indices refer to
+        the input), or None when no region holds enough long lines.
     p_value : float
-        Image-level p-value (Bonferroni over the group tests).
+        Image-level p-value (Bonferroni over the regions tested).
     test : str
         The test, in plain words.
     evidence : str
-        ``"group"``, ``"single line"`` or ``"none"``: the criterion that
+        ``"region"``, ``"single line"`` or ``"none"``: the criterion that
         drove the verdict.
     flagged_ids : tuple of int
-        Members of departing groups (and, with ``single_lines``, departing
-        lines), for localisation.
+        The lines of a departing region that follow its lens (and, with
+        ``single_lines``, departing lines), for localisation.
     paper_rules : PaperRules
     informative : bool
     reason : str or None
@@ -315,7 +265,7 @@ class ConsistencyResult:
         image centre, no ``k2``), in input order; NaN ``k1`` for lines too
         short to fit.
     outlier_ids : tuple of int
-        Lines that depart on their own, outside any departing group: shown
+        Lines that depart on their own, outside a departing region: shown
         to the examiner as possible curved or non-straight objects, never
         evidence of a splice.
     """
@@ -323,7 +273,7 @@ class ConsistencyResult:
     verdict: str
     model: GlobalModel | None
     departures: tuple[LineDeparture, ...]
-    groups: tuple[GroupDeparture, ...]
+    region: RegionTest | None
     p_value: float
     test: str
     evidence: str
@@ -573,60 +523,6 @@ def _robust_weight(z: np.ndarray, round_: int) -> np.ndarray:
     return np.clip(1.0 - (z / _TUKEY_C) ** 2, 0.0, None) ** 2
 
 
-def _candidate_groups(midpoints: np.ndarray, directions: np.ndarray, max_size: int) -> list[tuple[int, ...]]:
-    """Compact groups of lines that could be one pasted piece, chosen by geometry only.
-
-    Each line with its 1..max_size-1 nearest neighbours (by midpoint) within
-    :data:`_GROUP_RADIUS`, deduplicated, keeping only groups with two lines at
-    least :data:`_MIN_GROUP_SPREAD_DEG` apart in direction (module constants
-    explain both).
-
-    Parameters
-    ----------
-    midpoints : ndarray, shape (m, 2)
-        Line midpoints, normalised.
-    directions : ndarray, shape (m,)
-        Line directions, radians (modulo pi).
-    max_size : int
-    """
-    m = len(midpoints)
-    distance = np.linalg.norm(midpoints[:, None] - midpoints[None], axis=2)
-    order = np.argsort(distance, axis=1, kind="stable")
-    groups = set()
-    for j in range(m):
-        near = [i for i in order[j, :max_size] if distance[j, i] <= _GROUP_RADIUS]
-        groups.update(tuple(sorted(near[:size])) for size in range(2, len(near) + 1))
-    spread = np.cos(np.radians(_MIN_GROUP_SPREAD_DEG))
-
-    def wide(g: tuple[int, ...]) -> bool:
-        d = directions[list(g)]
-        return bool(np.min(np.abs(np.cos(d[:, None] - d[None]))) <= spread)
-
-    return sorted(filter(wide, groups), key=lambda g: (len(g), g))
-
-
-def _group_tests(
-    groups: list[tuple[int, ...]], dep: _Departures, cov: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """GLS common departure of each group: (delta, stderr, heterogeneity chi2), each (G,)."""
-    delta = np.empty(len(groups))
-    stderr = np.empty(len(groups))
-    q = np.empty(len(groups))
-    sizes = np.array([len(g) for g in groups], dtype=np.intp)
-    for size in np.unique(sizes):
-        pick = np.flatnonzero(sizes == size)
-        members = np.array([groups[i] for i in pick])  # (G_s, s)
-        grad = dep.gradient[members]  # (G_s, s, 4)
-        c = np.einsum("gsi,ij,gtj->gst", grad, cov, grad) + np.eye(size) * dep.line_var[members][:, :, None]
-        d = dep.delta[members]
-        solved = np.linalg.solve(c, np.stack((np.ones_like(d), d), axis=2))  # C^-1 [1, d]
-        info = solved[:, :, 0].sum(axis=1)
-        mean = np.einsum("gs,gs->g", solved[:, :, 0], d) / info
-        delta[pick], stderr[pick] = mean, info**-0.5
-        q[pick] = np.einsum("gs,gs->g", d, solved[:, :, 1]) - mean**2 * info
-    return delta, stderr, q
-
-
 def _inconclusive(
     reason: str, fits: list[LineK1], rules: PaperRules, alpha: float
 ) -> ConsistencyResult:
@@ -635,8 +531,8 @@ def _inconclusive(
         for j, f in enumerate(fits)
     )
     test = "no test: " + reason
-    return ConsistencyResult("inconclusive", None, departures, (), np.nan, test, "none", (), rules, False, reason, alpha,
-                             tuple(fits), ())
+    return ConsistencyResult("inconclusive", None, departures, None, np.nan, test, "none", (), rules, False, reason,
+                             alpha, tuple(fits), ())
 
 
 def assess(
@@ -650,8 +546,6 @@ def assess(
     tau_k1: float = TAU_K1,
     bow_rel: float = BOW_REL,
     dof: float = DOF,
-    tau_region: float = TAU_REGION,
-    max_group_size: int = 4,
     centre_prior_sd: float = 0.1,
     k2_prior_sd: float = 0.3,
     single_lines: bool = False,
@@ -677,15 +571,13 @@ def assess(
         included) exceeds this are uninformative: short, noisy or near-radial
         lines that could not reveal a departure of the size splices cause
         (``|delta k1| >= 0.05``).
-    tau_k1, bow_rel, dof, tau_region : float
+    tau_k1, bow_rel, dof : float
         Model-error terms and the t's degrees of freedom (module docstring).
-    max_group_size : int
-        Largest group of neighbouring lines tested for a common departure.
     single_lines : bool
         Whether one line departing on its own may reject consistency. Off by
         default: on real photos a lone departure is a curved or non-straight
         object far more often than a pasted straight line (``DOF``), so it is
-        reported as an outlier and the verdict rests on groups.
+        reported as an outlier and the verdict rests on regions.
     centre_prior_sd, k2_prior_sd : float
         Standard deviations of zero-mean Gaussian priors on the centre of
         distortion (normalised) and on ``k2``: weak, they only keep the fit
@@ -699,21 +591,14 @@ def assess(
     -----
     Null: one lens explains every line, each line with the heavy-tailed
     error of the module docstring (so curved objects are part of the null,
-    as outliers). Alternative: a compact region follows another (or a
-    displaced) lens, so its lines depart *together*, in the same direction,
-    and agree with each other. Candidate groups are chosen by geometry
-    only (:func:`_candidate_groups`). A group's p-value is the larger of two,
-    each valid under one null: (i) independent lines: no line can pass it
-    alone (:func:`_group_p`: the weakest member, ``P(all s depart in one
-    direction with two-sided p <= x) = 2 (x / 2)**s``, or for ``s >= 3``
-    the common departure of the group without any one member); (ii) neighbouring
-    lines share regional model error (term 6): the group's common
-    departure, its variance plus ``tau_region**2``, is one Student-t
-    observation. Groups whose members disagree (heterogeneity p <
-    ``alpha``) are not counted. The image p-value is the smallest group
-    p-value times the number of groups (Bonferroni), so a lone line, or
-    departing lines that are far apart or do not agree, can never push it
-    below ``alpha``.
+    as outliers). Alternative: a compact region follows another lens, or
+    this lens about a displaced centre (a moved copy), so its long lines
+    agree with that lens and depart from the photo's together
+    (:mod:`.regions`: a Bayes factor per region, valid as a p-value through
+    Markov's inequality, Bonferroni over the regions). A lone line, lines
+    far apart, lines that do not agree with one alternative lens, and
+    parallel edges bending alone (one curved object) cannot push the image
+    p-value below ``alpha``; they are reported as outliers.
 
     References
     ----------
@@ -739,9 +624,8 @@ def assess(
             "short, noisy or near-radial lines do not constrain k1)"
         )
         return _inconclusive(reason, paper_fits, rules, alpha)
-    return _decide(norm_lines, informative, paper_fits, chords, rules, scale, alpha,
-                   (tau_k1, bow_rel, dof, tau_region),
-                   max_group_size, np.array([np.inf, k2_prior_sd, centre_prior_sd, centre_prior_sd]), single_lines)
+    return _decide(norm_lines, informative, paper_fits, chords, rules, shape, alpha, (tau_k1, bow_rel, dof),
+                   np.array([np.inf, k2_prior_sd, centre_prior_sd, centre_prior_sd]), single_lines)
 
 
 def _model_var(fits: Sequence[LineK1], chords_px: np.ndarray, tau_k1: float, bow_rel: float) -> np.ndarray:
@@ -767,14 +651,14 @@ def _decide(
     paper_fits: list[LineK1],
     chords_px: np.ndarray,
     rules: PaperRules,
-    scale: float,
+    shape: tuple[int, ...],
     alpha: float,
-    error_model: tuple[float, float, float, float],
-    max_group_size: int,
+    error_model: tuple[float, float, float],
     prior_sd: np.ndarray,
     single_lines: bool,
 ) -> ConsistencyResult:
-    tau_k1, bow_rel, dof, tau_region = error_model
+    tau_k1, bow_rel, dof = error_model
+    scale = norm_scale(shape)
     chosen = [norm_lines[j] for j in informative]
     # Neighbouring edge points are strongly correlated, so the global fit
     # loses little by keeping every step-th point of very long inputs; the
@@ -812,26 +696,25 @@ def _decide(
     line_p = 2.0 * stdtr(dof, -np.abs(dep.z))
     line_z = np.sign(dep.z) * -ndtri(line_p / 2.0)
     directions = np.array([np.arctan2(*(p[-1] - p[0])[::-1]) for p in chosen])
-    groups = _candidate_groups(np.array([p.mean(axis=0) for p in chosen]), directions, max_group_size)
-    g_delta, g_se, g_q = _group_tests(groups, dep, cov)
-    g_z = g_delta / g_se
-    regional = 2.0 * stdtr(dof, -np.abs(g_delta) / np.hypot(g_se, tau_region))
-    group_p = np.maximum(_group_p(groups, dep, cov, line_p, dof), regional)
-    het_p = chdtrc(np.array([len(g) for g in groups]) - 1, g_q)
-    homogeneous = het_p >= alpha
-    group_flag = (group_p * len(groups) < alpha) & homogeneous
+    region = region_test(
+        np.array([p.mean(axis=0) for p in chosen]), directions,
+        chords_px[informative] >= REGION_MIN_LENGTH * min(shape[0], shape[1]), dep.delta, dep.stderr,
+        float(beta[0]), beta[2:], np.array([shape[1], shape[0]]) / (2.0 * scale), dof)
     line_flag = line_p * line_p.size < alpha
-    criteria = _criteria(line_p, group_p, homogeneous, single_lines)
+    criteria = _criteria(line_p, region, single_lines)
     image_p = float(min(1.0, len(criteria) * min(criteria.values())))
+    evidence = min(criteria, key=criteria.get) if image_p < alpha else "none"
 
     ids = informative
-    in_group = set()
-    for g, f in zip(groups, group_flag):
-        if f:
-            in_group.update(ids[list(g)].tolist())
-    flagged = set(in_group) | (set(ids[line_flag].tolist()) if single_lines and image_p < alpha else set())
+    flagged = set()
+    if evidence == "region":
+        flagged = set(ids[list(region.pasted_ids)].tolist())
+    elif evidence == "single line":
+        flagged = set(ids[line_flag].tolist())
     outliers = set(ids[line_flag].tolist()) - flagged
-    evidence = min(criteria, key=criteria.get) if image_p < alpha else "none"
+    if region is not None:
+        region = replace(region, line_ids=tuple(int(ids[i]) for i in region.line_ids),
+                                     pasted_ids=tuple(int(ids[i]) for i in region.pasted_ids))
     inlier = np.zeros(len(norm_lines), dtype=bool)
     inlier[ids[~line_flag]] = True
     full_weight = np.zeros(len(norm_lines))
@@ -845,19 +728,18 @@ def _decide(
         n_lines_explained=int(inlier.sum()), n_lines_informative=int(ids.size),
     )
     departures = _line_departures(paper_fits, fits, ids, dep, line_z, line_p, line_flag)
-    group_results = tuple(
-        GroupDeparture(tuple(int(ids[i]) for i in g), float(d), float(s), float(z), float(p), float(h), bool(f))
-        for g, d, s, z, p, h, f in zip(groups, g_delta, g_se, g_z, group_p, het_p, group_flag)
-    )
     test = (
         f"One camera model (k1, k2 and centre of distortion free, each line its own straight line) fitted "
         f"robustly to {ids.size} informative lines; each line's own k1 (global k2 and centre fixed) compared "
         f"with the model's, its error including the photo's own edge noise and the measured non-straightness "
-        f"of real edges (Student t, {dof:g} degrees of freedom). Criterion: a compact group of lines in "
-        f"different directions departs together, in one direction, and its members agree with each other; a "
-        f"group is as strong as its weakest member (p = 2 (max p / 2)^size) and, as neighbouring lines share "
-        f"regional model error, as one line (its common departure, Student t); the larger p counts, times "
-        f"{len(groups)} groups (Bonferroni)"
+        f"of real edges (Student t, {dof:g} degrees of freedom). Criterion: a compact region whose long lines "
+        f"(at least {REGION_MIN_LENGTH:g} of the shorter side; parallel edges close together count once) follow "
+        f"another lens, or this lens about a centre displaced by a move within the frame (a copy), better than "
+        f"they follow the photo's: the Bayes factor B of that account against the lines' own errors, the other "
+        f"lens's k1 weighted as lensfun's calibrations of real lenses spread; lines in two directions must "
+        f"each carry the evidence (a curved object bends one family of parallel edges), and a moved copy's "
+        f"must survive leaving out any one line; p = 1/B for a region, times "
+        f"{0 if region is None else region.n_regions} regions (Bonferroni)"
         + ("; or one line departs (smallest line p times the number of lines)" if single_lines else
            "; lines departing on their own are shown as possible curved or non-straight objects and cannot "
            "reject")
@@ -865,54 +747,19 @@ def _decide(
            if len(criteria) > 1 else ".")
     )
     verdict = "inconsistent" if image_p < alpha else "consistent"
-    return ConsistencyResult(verdict, model, departures, group_results, image_p, test, evidence,
+    return ConsistencyResult(verdict, model, departures, region, image_p, test, evidence,
                              tuple(sorted(flagged)), rules, True, None, alpha, tuple(paper_fits),
                              tuple(sorted(outliers)))
 
 
-def _group_p(
-    groups: list[tuple[int, ...]], dep: _Departures, cov: np.ndarray, line_p: np.ndarray, dof: float
-) -> np.ndarray:
-    """P-value of each group under independent heavy-tailed lines, shape (G,); 1 unless all depart one way.
-
-    Two tests that no single line can pass alone, each valid for its group:
-    the weakest member, ``2 (max_i p_i / 2)**s``; and, for ``s >= 3``, the
-    largest over members ``i`` of the common-departure p-value of the group
-    without ``i`` (a Student t with ``dof``: the mean of nearly Cauchy
-    variables is as heavy-tailed as one). The smaller of the two, doubled
-    (Bonferroni over the two), is returned.
-    """
-    out = np.ones(len(groups))
-    for k, g in enumerate(groups):
-        members = np.array(g)
-        signs = np.sign(dep.z[members])
-        if not (np.all(signs == signs[0]) and signs[0] != 0):
-            continue
-        weakest = 2.0 * (line_p[members].max() / 2.0) ** members.size
-        if members.size < 3:
-            out[k] = min(1.0, weakest)
-            continue
-        left_out = []
-        for i in range(members.size):
-            rest = np.delete(members, i)
-            grad = dep.gradient[rest]
-            c = grad @ cov @ grad.T + np.diag(dep.line_var[rest])
-            solved = np.linalg.solve(c, np.column_stack((np.ones(rest.size), dep.delta[rest])))
-            info = solved[:, 0].sum()
-            left_out.append(2.0 * stdtr(dof, -abs(solved[:, 0] @ dep.delta[rest]) * info**-0.5))
-        out[k] = min(1.0, 2.0 * min(weakest, max(left_out)))
-    return out
-
-
-def _criteria(line_p: np.ndarray, group_p: np.ndarray, homogeneous: np.ndarray, single_lines: bool) -> dict[str, float]:
+def _criteria(line_p: np.ndarray, region: RegionTest | None, single_lines: bool) -> dict[str, float]:
     """Adjusted p-value of each rejection criterion, each valid under any dependence between tests.
 
-    ``group``: the smallest p-value among groups whose members agree,
-    multiplied by the count of all groups (a minimum over a subset cannot
-    exceed the Bonferroni bound). ``single line`` (only with
+    ``region``: the strongest region's p-value times the number of regions
+    tested (:class:`.regions.RegionTest`). ``single line`` (only with
     ``single_lines``): Bonferroni over lines.
     """
-    out = {"group": min(1.0, max(group_p.size, 1) * float(group_p[homogeneous].min(initial=1.0)))}
+    out = {"region": 1.0 if region is None else region.image_p_value}
     if single_lines:
         out["single line"] = min(1.0, line_p.size * float(line_p.min(initial=1.0)))
     return out

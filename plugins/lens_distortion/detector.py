@@ -116,17 +116,27 @@ def _paper_rules(result: ConsistencyResult) -> dict[str, Any]:
     }
 
 
-def _groups(result: ConsistencyResult) -> list[dict[str, Any]]:
-    return [
-        {"line_ids": [i + 1 for i in g.line_ids], "delta_k1": g.delta_k1, "delta_k1_stderr": g.delta_k1_stderr,
-         "z": _none_if_nan(g.z), "p_value": g.p_value, "heterogeneity_p": g.heterogeneity_p}
-        for g in result.groups
-        if g.flagged
-    ]
+def _region(result: ConsistencyResult) -> dict[str, Any] | None:
+    """The region that departs most from one lens, whether or not it decided the test."""
+    r = result.region
+    if r is None:
+        return None
+    scale = result.model.scale_px
+    return {
+        "line_ids": [i + 1 for i in r.line_ids],
+        "pasted_line_ids": [i + 1 for i in r.pasted_ids],
+        "alternative": r.alternative,
+        "donor_k1": _none_if_nan(r.donor_k1),
+        "shift_px": None if not np.isfinite(r.shift[0]) else [round(r.shift[0] * scale, 1), round(r.shift[1] * scale, 1)],
+        "log10_bayes_factor": _none_if_nan(r.log10_bayes_factor),
+        "p_value": r.p_value,
+        "n_regions": r.n_regions,
+        "decided": result.evidence == "region",
+    }
 
 
 def _regions(records: list[dict[str, Any]]) -> list[dict[str, float]]:
-    """Bounding box, pixels, of the lines in departing groups: where the pasted part is likely to be."""
+    """Bounding box, pixels, of the lines of a departing region: where the pasted part is likely to be."""
     flagged = [np.asarray(r["points_px"]) for r in records if r["flagged"]]
     if not flagged:
         return []
@@ -158,18 +168,23 @@ def _summary(result: ConsistencyResult, records: list[dict[str, Any]]) -> str:
     m = result.model
     if result.verdict == "inconsistent":
         ids = ", ".join(str(i + 1) for i in result.flagged_ids)
-        kind = {"group": "a compact group of lines that agree with each other",
-                "single line": "a single line"}[result.evidence]
+        if result.evidence == "region":
+            r = result.region
+            kind = (f"a compact region whose lines follow another lens, k1 about {r.donor_k1:.2f}"
+                    if r.alternative == "another lens" else
+                    "a compact region whose lines follow this lens about a displaced centre, as a moved copy's do")
+        else:
+            kind = "a single line"
         return (f"Line(s) {ids} ({kind}) depart from the lens model that explains {m.n_lines_explained} of "
                 f"{n_inf} informative lines (k1 = {m.k1:.3f} ± {m.k1_stderr:.3f}; image-level p = {result.p_value:.2g}).")
     if result.outlier_ids:
         ids = ", ".join(str(i + 1) for i in result.outlier_ids)
         return (f"The {n_inf} informative lines fit one lens model (k1 = {m.k1:.3f} ± {m.k1_stderr:.3f}) except "
                 f"line(s) {ids}, which depart on their own: curved or non-straight objects? The examiner should "
-                f"look at them; lone departing lines are not evidence of a splice, and no compact group of lines "
-                f"departs together (image-level p = {result.p_value:.2g}).")
+                f"look at them; lone departing lines are not evidence of a splice, and no compact region's lines "
+                f"follow another lens (image-level p = {result.p_value:.2g}).")
     return (f"All {n_inf} informative lines fit one lens model (k1 = {m.k1:.3f} ± {m.k1_stderr:.3f}); "
-            f"no line or group departs significantly (image-level p = {result.p_value:.2g}).")
+            f"no line or region departs significantly (image-level p = {result.p_value:.2g}).")
 
 
 def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
@@ -213,8 +228,7 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     t = timer.lap("lines", t)
     result = assess([line.points for line in lines], shape, alpha=float(params["alpha"]),
                     min_lines=int(params["min_lines"]), single_lines=bool(params["single_lines"]),
-                    tau_k1=float(params["tau_k1"]), bow_rel=float(params["bow_rel"]), dof=float(params["dof"]),
-                    tau_region=float(params["tau_region"]))
+                    tau_k1=float(params["tau_k1"]), bow_rel=float(params["bow_rel"]), dof=float(params["dof"]))
     t = timer.lap("consistency", t)
     records = _line_records(lines, shape, result, params)
     timer.lap("per_line_k1", t)
@@ -228,7 +242,7 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
         "evidence": result.evidence,
         "flagged_line_ids": [i + 1 for i in result.flagged_ids],
         "outlier_line_ids": [i + 1 for i in result.outlier_ids],
-        "flagged_groups": _groups(result),
+        "region": _region(result),
         "regions_px": _regions(records),
         "paper_rules": _paper_rules(result),
         "n_edge_points": int(len(edges.xy)),

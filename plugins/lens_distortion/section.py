@@ -37,6 +37,30 @@ def _line_rows(lines: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return rows
 
 
+def _region_text(region: dict[str, Any] | None) -> str | None:
+    """The strongest region in words: its lines, the lens that explains them and the strength."""
+    if not region:
+        return None
+    if region["alternative"] == "another lens":
+        account = f"another lens, k1 about {region['donor_k1']:+.3f}"
+    else:
+        dx, dy = region["shift_px"]
+        account = f"this lens about a centre displaced as by a copy moved ({dx:+.0f}, {dy:+.0f}) px"
+    pasted = ", ".join(str(i) for i in region["pasted_line_ids"]) or "none of them"
+    log10 = region["log10_bayes_factor"]
+    if region["decided"]:
+        verdict = "it decides the test"
+    elif log10 is None or log10 <= 0:
+        verdict = "one lens explains these lines at least as well"
+    else:
+        verdict = "not strong enough to decide the test against the number of regions tested"
+    strength = ("its lines in one of the two directions give that account no support" if log10 is None else
+                f"Bayes factor 10^{log10:.1f} against one lens")
+    return (f"Strongest region: lines {', '.join(str(i) for i in region['line_ids'])}. The best other account of "
+            f"them is {account}, followed by lines {pasted}; {strength} (p = {region['p_value']:.2g} for this "
+            f"region, {region['n_regions']} regions tested): {verdict}.")
+
+
 def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSection:
     """The section for one lens distortion finding: figures, tables, test, method and limitations."""
     details = finding.details
@@ -54,6 +78,7 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
         "p_text": "not computed" if p is None else f"{p:.3g}",
         "alpha": details.get("alpha"),
         "decision": decision,
+        "region_text": _region_text(details.get("region")),
         "lines": _line_rows(details.get("lines", [])),
         "rules": details["paper_rules"],
         "references": list(REFERENCES),

@@ -10,14 +10,14 @@ from typing import Any
 
 from forensics_core import DetectorSpec
 
-from .error_model import BOW_REL, DOF, TAU_K1, TAU_REGION
+from .error_model import BOW_REL, DOF, TAU_K1
 
 #: What the synthetic generator makes (``forensics synth --kind``): an authentic
 #: photo and the paper's three kinds of splice.
 KINDS = ("authentic", "copy_move", "other_camera", "other_zoom")
 
 NAME = "lens_distortion"
-VERSION = "0.2.0"
+VERSION = "0.3.0"
 
 REFERENCES = (
     "H. R. Chennamma, L. Rangarajan, Image splicing detection using inherent lens radial distortion, "
@@ -25,6 +25,8 @@ REFERENCES = (
     "F. Devernay, A non-maxima suppression method for edge detection with sub-pixel accuracy, "
     "INRIA RR-2724, 1995.",
     "F. Devernay, O. Faugeras, Straight lines have to be straight, Machine Vision and Applications 13, 2001.",
+    "L. Wasserman, A. Ramdas, S. Balakrishnan, Universal inference, PNAS 117(29), 2020.",
+    "lensfun 0.3 lens database (distribution of real lenses' distortion), https://lensfun.github.io.",
 )
 
 DEFAULT_PARAMS: dict[str, Any] = {
@@ -43,7 +45,6 @@ DEFAULT_PARAMS: dict[str, Any] = {
     "tau_k1": TAU_K1,
     "bow_rel": BOW_REL,
     "dof": DOF,
-    "tau_region": TAU_REGION,
 }
 
 SPEC = DetectorSpec(

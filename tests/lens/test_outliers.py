@@ -23,7 +23,7 @@ SHAPE = (1200, 1600)
 SCALE = geometry.norm_scale(SHAPE)
 CAM = {"k1": 0.08, "k2": 0.0, "centre": (0.0, 0.0)}
 OTHER = {"k1": -0.10, "k2": 0.0, "centre": (0.0, 0.0)}
-SYNTHETIC_NULL = {"tau_k1": 0.0, "bow_rel": 0.0, "dof": np.inf, "tau_region": 0.0}
+SYNTHETIC_NULL = {"tau_k1": 0.0, "bow_rel": 0.0, "dof": np.inf}
 ALPHA = 0.01
 
 
@@ -79,7 +79,7 @@ def test_one_departing_line_is_an_outlier_not_a_splice(seed):
 
 @pytest.mark.parametrize("seed", range(4))
 def test_scattered_departing_lines_are_not_a_splice(seed):
-    """Three lines from another lens, far apart (more than the group radius): no compact group."""
+    """Three lines from another lens, far apart (more than the region radius): no compact region."""
     extra = [_segment((-0.7, -0.45), 0.4, 0.4), _segment((0.7, -0.45), 2.6, 0.4), _segment((0.0, 0.55), 0.1, 0.5)]
     lines, n = _scene(seed, extra, [OTHER] * 3)
     result = assess(lines, SHAPE, **SYNTHETIC_NULL)
