@@ -45,7 +45,7 @@ def _region_text(region: dict[str, Any] | None) -> str | None:
         account = f"another lens, k1 about {region['donor_k1']:+.3f}"
     else:
         dx, dy = region["shift_px"]
-        account = f"this lens about a centre displaced as by a copy moved ({dx:+.0f}, {dy:+.0f}) px"
+        account = f"this lens about a centre displaced as by a copy moved ({round(dx):+d}, {round(dy):+d}) px"
     pasted = ", ".join(str(i) for i in region["pasted_line_ids"]) or "none of them"
     log10 = region["log10_bayes_factor"]
     if region["decided"]:
