@@ -101,6 +101,7 @@ PASTED_FRACTION = 0.5
 MOVE_REL_ERROR = 0.1
 _K1_GRID = np.linspace(-1.0, 1.5, 2501)
 _MOVE_STEP = 0.025
+_MIN_RHO = 1e-3
 
 
 @dataclass(frozen=True)
@@ -288,6 +289,9 @@ def region_test(
     candidates = np.flatnonzero(long_enough)
     normal = np.column_stack((-np.sin(directions), np.cos(directions)))
     rho = np.einsum("ij,ij->i", midpoints - centre, normal)
+    # A line through the centre of distortion has no bow whatever the lens, and so no k1 to move
+    # (its standard error is then huge); keeping rho off zero keeps its predicted departure finite.
+    rho = np.where(np.abs(rho) < _MIN_RHO, np.where(rho < 0, -_MIN_RHO, _MIN_RHO), rho)
     best: tuple[float, RegionTest] | None = None
     tested = 0
     for seed in candidates:

@@ -125,3 +125,13 @@ def test_window_from_another_lens_under_the_real_photo_error_model():
             assert set(result.flagged_ids) <= set(range(n, len(lines)))
     print(f"\ncalled {called} of 12")
     assert called >= 3
+
+
+def test_a_line_through_the_centre_of_distortion_keeps_the_test_finite():
+    """A line whose distance from the fitted centre is zero has no bow to move: no division by zero."""
+    mid = np.array([[0.0, 0.0], [0.1, 0.2], [0.2, -0.1], [0.3, 0.1]])
+    directions = np.array([0.0, np.pi / 2, 0.1, np.pi / 2 + 0.1])
+    with np.errstate(divide="raise", invalid="raise"):
+        result = region_test(mid, directions, np.ones(4, dtype=bool), np.full(4, 0.1), np.full(4, 0.01), 0.1,
+                             np.zeros(2), np.array([1.0, 0.75]), DOF)
+    assert np.isfinite(result.log10_bayes_factor) and 0.0 <= result.p_value <= 1.0
