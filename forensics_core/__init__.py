@@ -36,6 +36,9 @@ _LAZY = {
     "EvidenceError": "evidence",
     "load_evidence": "evidence",
     "SyntheticCase": "synthetic",
+    "grey_jpeg": "synthetic",
+    "grey_shapes": "synthetic",
+    "paste_ellipse": "synthetic",
     "analyze": "analysis",
 }
 
@@ -69,6 +72,9 @@ __all__ = [
     "VerdictLabel",
     "__version__",
     "analyze",
+    "grey_jpeg",
+    "grey_shapes",
     "hookimpl",
     "load_evidence",
+    "paste_ellipse",
 ]

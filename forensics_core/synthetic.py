@@ -9,10 +9,12 @@ on the others' forgeries and authentic photos.
 
 from __future__ import annotations
 
+import io
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
+from PIL import Image
 
 
 @dataclass(frozen=True)
@@ -47,4 +49,75 @@ class SyntheticCase:
     conditions: Mapping[str, str] = field(default_factory=dict)
 
 
-__all__ = ["SyntheticCase"]
+def grey_shapes(rng: np.random.Generator, size: tuple[int, int]) -> np.ndarray:
+    """A noiseless grey scene: smooth shading and 12 filled ellipses, blurred by 1.2 px.
+
+    A base for plugins' synthetic photos; a plugin adds the trace it
+    studies (grain, quantisation, a pasted piece).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    size : (int, int)
+        Width, height in pixels.
+
+    Returns
+    -------
+    ndarray of float32, shape (height, width)
+        Grey levels, about 30-220.
+    """
+    import cv2
+
+    w, h = size
+    y, x = np.mgrid[0:h, 0:w].astype(np.float32)
+    img = 90 + 60 * np.sin(x / rng.uniform(80, 200) + rng.uniform(0, 6)) * np.cos(y / rng.uniform(80, 200))
+    for _ in range(12):
+        centre = (int(rng.integers(0, w)), int(rng.integers(0, h)))
+        axes = (int(rng.integers(20, 140)), int(rng.integers(20, 140)))
+        cv2.ellipse(img, centre, axes, float(rng.uniform(0, 180)), 0, 360, float(rng.uniform(30, 220)), -1)
+    return cv2.GaussianBlur(img, (0, 0), 1.2)
+
+
+def paste_ellipse(host: np.ndarray, donor: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """The host with an ellipse of the donor pasted in the photo's central half, and the ellipse's mask.
+
+    Parameters
+    ----------
+    host, donor : ndarray, shape (H, W)
+    rng : numpy.random.Generator
+        Draws the centre and the semi-axes (60-159 px across, 60-139 px down).
+
+    Returns
+    -------
+    image : ndarray, shape (H, W)
+    mask : ndarray of bool, shape (H, W)
+        True on pasted pixels.
+    """
+    import cv2
+
+    h, w = host.shape
+    mask = np.zeros((h, w), np.uint8)
+    centre = (int(rng.integers(w // 4, 3 * w // 4)), int(rng.integers(h // 4, 3 * h // 4)))
+    cv2.ellipse(mask, centre, (int(rng.integers(60, 160)), int(rng.integers(60, 140))), 0, 0, 360, 1, -1)
+    pasted = mask.astype(bool)
+    out = host.copy()
+    out[pasted] = donor[pasted]
+    return out, pasted
+
+
+def grey_jpeg(img: np.ndarray, quality: int) -> bytes:
+    """JPEG bytes of a grey image, with libjpeg's standard tables at ``quality``.
+
+    Parameters
+    ----------
+    img : ndarray, shape (H, W)
+        Grey levels, 0-255; rounded and clipped to 8 bits.
+    quality : int
+        libjpeg quality, 1-100.
+    """
+    buf = io.BytesIO()
+    Image.fromarray(np.clip(np.round(img), 0, 255).astype(np.uint8)).save(buf, format="JPEG", quality=quality)
+    return buf.getvalue()
+
+
+__all__ = ["SyntheticCase", "grey_jpeg", "grey_shapes", "paste_ellipse"]

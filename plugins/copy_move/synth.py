@@ -10,14 +10,12 @@ rotated or scaled) before the file is saved, as an editor's clone tool does.
 
 from __future__ import annotations
 
-import io
 from collections.abc import Iterator
 
 import cv2
 import numpy as np
-from PIL import Image
 
-from forensics_core import SyntheticCase
+from forensics_core import SyntheticCase, grey_jpeg as encode
 
 DEFAULT_SIZE = (600, 800)
 _TRANSFORMS = ("translation", "rotation", "scale")
@@ -67,12 +65,6 @@ def clone(img: np.ndarray, rng: np.random.Generator, kind: str) -> tuple[np.ndar
     out = img.copy()
     out[mask] = moved[mask]
     return out, mask
-
-
-def encode(img: np.ndarray, quality: int) -> bytes:
-    buf = io.BytesIO()
-    Image.fromarray(np.clip(np.round(img), 0, 255).astype(np.uint8)).save(buf, format="JPEG", quality=quality)
-    return buf.getvalue()
 
 
 def synthetic_cases(seed: int, count: int, size: tuple[int, int] = DEFAULT_SIZE) -> Iterator[SyntheticCase]:

@@ -12,34 +12,20 @@ from __future__ import annotations
 import io
 from collections.abc import Iterator
 
-import cv2
 import numpy as np
 from PIL import Image
 
-from forensics_core import SyntheticCase
+from forensics_core import SyntheticCase, grey_shapes, paste_ellipse
+from forensics_core import grey_jpeg as encode
 
 DEFAULT_SIZE = (1024, 768)
 
 
 def scene(rng: np.random.Generator, size: tuple[int, int]) -> np.ndarray:
-    """A grey scene, float in [0, 255], shape (height, width)."""
-    w, h = size
-    y, x = np.mgrid[0:h, 0:w].astype(np.float32)
-    img = 90 + 60 * np.sin(x / rng.uniform(80, 200) + rng.uniform(0, 6)) * np.cos(y / rng.uniform(80, 200))
-    for _ in range(12):
-        centre = (int(rng.integers(0, w)), int(rng.integers(0, h)))
-        axes = (int(rng.integers(20, 140)), int(rng.integers(20, 140)))
-        cv2.ellipse(img, centre, axes, float(rng.uniform(0, 180)), 0, 360, float(rng.uniform(30, 220)), -1)
-    img = cv2.GaussianBlur(img, (0, 0), 1.2)
+    """A grey scene with sensor-like grain, float in [0, 255], shape (height, width)."""
+    img = grey_shapes(rng, size)
     img += rng.normal(0, rng.uniform(2.5, 5.0), img.shape).astype(np.float32)
     return np.clip(img, 8, 247)
-
-
-def encode(img: np.ndarray, quality: int) -> bytes:
-    """JPEG bytes of a grey image at ``quality`` (4:4:4, libjpeg's standard tables)."""
-    buf = io.BytesIO()
-    Image.fromarray(np.round(img).astype(np.uint8)).save(buf, format="JPEG", quality=quality, subsampling=0)
-    return buf.getvalue()
 
 
 def decode(data: bytes) -> np.ndarray:
@@ -55,12 +41,7 @@ def paste(host: np.ndarray, rng: np.random.Generator, kind: str) -> tuple[np.nda
         dy, dx = (int(v) for v in rng.integers(1, 8, 2))
         shifted = decode(encode(donor[dy:, dx:], int(rng.choice([60, 75]))))
         donor[dy:, dx:] = shifted
-    mask = np.zeros((h, w), np.uint8)
-    centre = (int(rng.integers(w // 4, 3 * w // 4)), int(rng.integers(h // 4, 3 * h // 4)))
-    cv2.ellipse(mask, centre, (int(rng.integers(60, 160)), int(rng.integers(60, 140))), 0, 0, 360, 1, -1)
-    out = host.copy()
-    out[mask.astype(bool)] = donor[mask.astype(bool)]
-    return out, mask.astype(bool)
+    return paste_ellipse(host, donor, rng)
 
 
 def synthetic_cases(seed: int, count: int, size: tuple[int, int] = DEFAULT_SIZE) -> Iterator[SyntheticCase]:
