@@ -224,6 +224,7 @@ def run_detector(
     job = _job(host, name, evidence, params, prior)
     if isinstance(job, DetectorFinding):
         return job
+    host.prepare([job.plugin])
     started = time.perf_counter()
     printed: str | None = None
     if options.isolation == "process" and can_fork():
@@ -272,8 +273,13 @@ def run_detectors(host: PluginHost, order: Sequence[str], evidence: Evidence, pa
             if isinstance(job, DetectorFinding):
                 done[name] = job
             else:
+                host.prepare([job.plugin])
                 running[Child(job.call, options.timeout_s)] = (name, job)
         if running:
+            # The next detector's imports, while the running ones compute.
+            upcoming = next((host.detectors[n].plugin for n in pending if n in host.detectors), None)
+            if upcoming is not None:
+                host.prepare([upcoming])
             for child in wait_any(list(running)):
                 name, job = running.pop(child)
                 outcome, printed = child.collect()
@@ -346,7 +352,6 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
     params = options.detector_params
     selected = list(options.detectors)
     contained = options.timeout_s if options.isolation == "process" else None
-    host.prepare()
     evidence.info.extra_metadata = _extra_metadata(host, evidence, contained)
     done = run_detectors(host, run_order(host, selected), evidence, params, options,
                          detector_jobs(options, evidence))

@@ -59,11 +59,12 @@ def forensics_register_detectors() -> Sequence[DetectorSpec]:
 def forensics_prepare() -> None:
     """Import the code your detectors run, once, before photos are analysed.
 
-    Called once in the main process before the first detector of a run (and
-    once per worker process of a batch). Each ``forensics_analyze`` call runs
-    in a forked child: modules imported here are shared with every child,
-    while a module first imported inside ``forensics_analyze`` is imported
-    again for every photo.
+    Called once in the main process (and once per worker process of a
+    batch), just before the first of your detectors starts, while other
+    plugins' detectors may already be running. Each ``forensics_analyze``
+    call runs in a forked child: modules imported here are shared with every
+    child, while a module first imported inside ``forensics_analyze`` is
+    imported again for every photo.
 
     Keep the plugin module itself light, importing at module level only what
     ``forensics_register_detectors`` needs (your ``DetectorSpec``), so that

@@ -68,7 +68,7 @@ class PluginHost:
         self.detectors: dict[str, RegisteredDetector] = {}
         self.allow = set(allow) if allow is not None else _env_names(ALLOW_ENV)
         self.deny = set(deny) if deny is not None else (_env_names(DENY_ENV) or set())
-        self._prepared: int | None = None
+        self._prepared: tuple[int, set[str]] = (0, set())
         from . import fusion
 
         self.add(fusion, "core.fusion", distribution="forensics", version=_core_version())
@@ -197,12 +197,23 @@ class PluginHost:
             else:
                 yield HookOutcome(impl.plugin_name, value=value)
 
-    def prepare(self) -> None:
-        """Call every ``forensics_prepare`` once for this host in this process (see the hook's documentation)."""
-        if self._prepared == os.getpid():
+    def prepare(self, plugins: Iterable[str] | None = None) -> None:
+        """Call the ``forensics_prepare`` of each plugin named (all by default) once for this host in this process.
+
+        See the hook's documentation. The runner prepares a plugin just
+        before its first detector starts, so that one plugin's imports
+        overlap the detectors already running instead of delaying them all.
+        """
+        pid, done = self._prepared
+        if pid != os.getpid():
+            done = set()
+            self._prepared = (os.getpid(), done)
+        implemented = [impl.plugin_name for impl in self.pm.hook.forensics_prepare.get_hookimpls()]
+        todo = [name for name in implemented if name not in done and (plugins is None or name in plugins)]
+        if not todo:
             return
-        self._prepared = os.getpid()
-        for _ in self.call_each("forensics_prepare"):
+        done.update(todo)
+        for _ in self.call_each("forensics_prepare", todo):
             pass
 
     def implementation(self, hook_name: str, plugin: str):

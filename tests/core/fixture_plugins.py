@@ -1,5 +1,6 @@
 """Plugins that misbehave on purpose, loaded through real entry points by the tests."""
 
+import os
 import time
 
 from forensics_core import DetectorResult, DetectorSpec, Status, hookimpl
@@ -34,6 +35,23 @@ class Reader:
     def forensics_analyze(self, detector, evidence, params, prior):
         seen = {name: f.details.get("mean_luma") for name, f in prior.items()}
         return DetectorResult(Status.OK, "Observed.", score=0.0, details={"seen": seen})
+
+
+PREPARED: list[int] = []
+
+
+class Preparing(_Detector):
+    """Notes each ``forensics_prepare`` call; its finding says which the main process had made before the fork."""
+
+    name = "preparing"
+
+    @hookimpl
+    def forensics_prepare(self):
+        PREPARED.append(os.getpid())
+
+    @hookimpl
+    def forensics_analyze(self, detector, evidence, params):
+        return DetectorResult(Status.OK, "Prepared.", score=0.0, details={"prepared": list(PREPARED)})
 
 
 class Raising(_Detector):
@@ -150,6 +168,7 @@ class Metadata:
 
 
 good, reader, raising, hanging, garbage = Good(), Reader(), Raising(), Hanging(), Garbage()
+preparing = Preparing()
 metadata_hanging = MetadataHanging()
 out_of_range, crashing, mutating, file_writer, chatty = OutOfRange(), Crashing(), Mutating(), FileWriter(), Chatty()
 bad_registration, typo, wrong_args, raising_fusion, metadata = BadRegistration(), Typo(), WrongArgs(), RaisingFusion(), Metadata()

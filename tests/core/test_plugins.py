@@ -1,6 +1,7 @@
 """Plugin discovery and failure containment, through real entry points."""
 
 import json
+import os
 import time
 from importlib.metadata import EntryPoint
 from pathlib import Path
@@ -34,6 +35,18 @@ def test_allow_and_deny_lists_from_the_environment(monkeypatch):
     monkeypatch.delenv("FORENSICS_DISABLE_PLUGINS")
     monkeypatch.setenv("FORENSICS_PLUGINS", "nothing_by_that_name")
     assert PluginHost.from_entry_points().detectors == {}
+
+
+def test_a_plugin_is_prepared_once_in_the_main_process_just_before_its_first_detector(photo):
+    import fixture_plugins
+
+    fixture_plugins.PREPARED.clear()
+    host = fixture_host("good", "preparing")
+    analyze(photo, ["good"], host=host)
+    assert fixture_plugins.PREPARED == []
+    first = by_name(analyze(photo, ["good", "preparing"], host=host, jobs=2))["preparing"]
+    again = by_name(analyze(photo, ["preparing"], host=host))["preparing"]
+    assert first.details["prepared"] == again.details["prepared"] == [os.getpid()]
 
 
 def test_a_raising_detector_is_recorded_and_the_others_survive(photo):
