@@ -1,6 +1,6 @@
 """Report building blocks shared by the core and the plugins."""
 
-from .images import display_image
+from .images import display_image, figure_png
 from .sections import Figure, ReportSection
 
-__all__ = ["Figure", "ReportSection", "display_image"]
+__all__ = ["Figure", "ReportSection", "display_image", "figure_png"]

@@ -27,6 +27,22 @@ MAX_LOSSLESS_SIDE = 600
 _JPEG_QUALITY = 85
 
 
+_PNG_LEVEL = 1
+
+
+def figure_png(img: Image.Image) -> bytes:
+    """A plugin figure as PNG bytes, compressed fast.
+
+    zlib's level 1 instead of Pillow's default 6: on a 1200-pixel map of a
+    photo it takes 0.08 s instead of 0.41 s for 9 % more bytes. The figure
+    is written once into the bundle and embedded in the PDF as JPEG anyway
+    (:func:`for_report`).
+    """
+    buf = io.BytesIO()
+    img.save(buf, format="PNG", compress_level=_PNG_LEVEL)
+    return buf.getvalue()
+
+
 def data_url(data: bytes, mime: str) -> str:
     return f"data:{mime};base64,{base64.b64encode(data).decode('ascii')}"
 

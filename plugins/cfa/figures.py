@@ -7,7 +7,6 @@ anything is drawn, so the cost does not grow with its resolution.
 
 from __future__ import annotations
 
-import io
 from collections.abc import Mapping
 from typing import Any
 
@@ -15,7 +14,7 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 from scipy import ndimage
 
-from forensics_core.report import display_image
+from forensics_core.report import display_image, figure_png
 
 MAP_MAX_SIDE = 1200
 
@@ -93,9 +92,7 @@ def map_png(pixels: np.ndarray, details: Mapping[str, Any]) -> bytes:
         draw.text((x0 + width, y0 + width), label, fill=REGION_COLOUR, font=font)
 
     out = _with_legend(canvas.convert("RGB"))
-    buf = io.BytesIO()
-    out.save(buf, format="PNG")
-    return buf.getvalue()
+    return figure_png(out)
 
 
 def _with_legend(img: Image.Image) -> Image.Image:

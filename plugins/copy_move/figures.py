@@ -6,13 +6,14 @@ rebuilt from ``findings.json`` and the evidence; the photo is reduced first.
 
 from __future__ import annotations
 
-import io
 from collections.abc import Mapping
 from typing import Any
 
 import cv2
 import numpy as np
 from PIL import Image, ImageDraw
+
+from forensics_core.report import figure_png
 
 MAX_SIDE = 1200
 TARGET = (230, 40, 40)
@@ -41,7 +42,4 @@ def overlay_png(luma: np.ndarray, details: Mapping[str, Any]) -> bytes:
             draw.line([(sx * k, sy * k), (tx * k, ty * k)], fill=LINK + (200,), width=1)
             draw.ellipse([tx * k - 2, ty * k - 2, tx * k + 2, ty * k + 2], outline=TARGET + (255,))
             draw.ellipse([sx * k - 2, sy * k - 2, sx * k + 2, sy * k + 2], outline=SOURCE + (255,))
-    buf = io.BytesIO()
-    # optimize=True tries every zlib setting: 3 s on a 1200-pixel figure for a few per cent of its size.
-    img.save(buf, format="PNG")
-    return buf.getvalue()
+    return figure_png(img)

@@ -6,13 +6,14 @@ Drawn from the photo and the block votes the finding carries
 
 from __future__ import annotations
 
-import io
 from collections.abc import Mapping
 from typing import Any
 
 import cv2
 import numpy as np
 from PIL import Image, ImageDraw
+
+from forensics_core.report import figure_png
 
 MAX_SIDE = 1200
 SINGLE = np.array([230, 40, 40], np.float32)
@@ -53,7 +54,4 @@ def votes_png(luma: np.ndarray, informative: np.ndarray, single: np.ndarray, det
         x0, y0 = 8 * win["col"] * k, 8 * win["row"] * k
         side = 8 * win["size"] * k
         draw.rectangle([x0, y0, x0 + side, y0 + side], outline=WINDOW, width=2)
-    buf = io.BytesIO()
-    # optimize=True tries every zlib setting: 3 s on a 1200-pixel figure for a few per cent of its size.
-    img.save(buf, format="PNG")
-    return buf.getvalue()
+    return figure_png(img)

@@ -6,14 +6,13 @@ so a report can be rebuilt from ``findings.json`` and the evidence.
 
 from __future__ import annotations
 
-import io
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-from forensics_core.report import display_image
+from forensics_core.report import display_image, figure_png
 
 MAP_MAX_SIDE = 1200
 
@@ -81,9 +80,7 @@ def map_png(pixels: np.ndarray, details: Mapping[str, Any]) -> bytes:
         box = draw.textbbox((x, y), text, font=font)
         draw.rectangle((box[0] - 2, box[1] - 1, box[2] + 2, box[3] + 1), fill=(255, 255, 255))
         draw.text((x, y), text, fill=colour, font=font)
-    out = io.BytesIO()
-    img.save(out, format="PNG")
-    return out.getvalue()
+    return figure_png(img)
 
 
 def vote_map_png(details: Mapping[str, Any], scale: int = 4) -> bytes:
@@ -117,9 +114,7 @@ def vote_map_png(details: Mapping[str, Any], scale: int = 4) -> bytes:
         rgb[_outline(blocks)] = MEANINGFUL if region["meaningful"] else CANDIDATE
     img = Image.fromarray(rgb.astype(np.uint8)).resize((share.shape[1] * scale, share.shape[0] * scale),
                                                       Image.Resampling.NEAREST)
-    out = io.BytesIO()
-    img.save(out, format="PNG")
-    return out.getvalue()
+    return figure_png(img)
 
 
 def regions_mask(details: dict[str, Any], shape: tuple[int, int]) -> np.ndarray:

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from PIL import ImageDraw, ImageFont
 
-from forensics_core.report import display_image
+from forensics_core.report import display_image, figure_png
 
 OVERLAY_MAX_SIDE = 1600
 
@@ -65,9 +65,7 @@ def overlay_png(pixels: np.ndarray, details: Mapping[str, Any]) -> bytes:
         box = draw.textbbox((x, y), label, font=font)
         draw.rectangle((box[0] - 2, box[1] - 1, box[2] + 2, box[3] + 1), fill=(255, 255, 255))
         draw.text((x, y), label, fill=colour, font=font)
-    out = io.BytesIO()
-    img.save(out, format="PNG")
-    return out.getvalue()
+    return figure_png(img)
 
 
 def k1_plot_svg(details: Mapping[str, Any]) -> bytes:

@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
+from forensics_core.report import figure_png
+
 from .conversion import inverse
 from .thumbnail import Comparison, to_8bit
 
@@ -85,9 +87,7 @@ def thumbnail_png(pixels: np.ndarray, thumb: Image.Image, cmp: Comparison | None
                     draw.rectangle((x + x0, _CAPTION_PX + y0, x + x1 - 1, _CAPTION_PX + y1 - 1), outline=colour,
                                    width=2)
         x += panel.size[0] + _GAP
-    out = io.BytesIO()
-    canvas.save(out, format="PNG")
-    return out.getvalue()
+    return figure_png(canvas)
 
 
 def lens_plot_svg(lens: Mapping[str, Any]) -> bytes:

@@ -7,13 +7,14 @@ averaged over 4 x 4 blocks so that the map shows regions, not single blocks.
 
 from __future__ import annotations
 
-import io
 from collections.abc import Mapping
 from typing import Any
 
 import cv2
 import numpy as np
 from PIL import Image, ImageDraw
+
+from forensics_core.report import figure_png
 
 MAX_SIDE = 1200
 NOISIER = np.array([230, 40, 40], np.float32)
@@ -69,6 +70,4 @@ def z_map_png(luma: np.ndarray, z: np.ndarray, used: np.ndarray, details: Mappin
         if win:
             x0, y0, side = 8 * win["col"] * k, 8 * win["row"] * k, 8 * win["size"] * k
             draw.rectangle([x0, y0, x0 + side, y0 + side], outline=colour, width=2)
-    buf = io.BytesIO()
-    img.save(buf, format="PNG")
-    return buf.getvalue()
+    return figure_png(img)
