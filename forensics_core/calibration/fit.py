@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
-from .model import Calibrator, CalibrationError, CalibrationSet, Fusion
+from .model import WEAK_SUPPORT_LR, Calibrator, CalibrationError, CalibrationSet, Fusion
 
 FOLDS = 5
 _LN10 = math.log(10.0)
@@ -266,11 +266,16 @@ def calibrate(paths: Sequence[Path], detectors: Sequence[str] | None = None,
 
 
 def supports_hp(rows: Sequence[dict[str, Any]], features: Mapping[str, str]) -> dict[str, dict[str, bool]]:
-    """For detectors calibrated on their score: per photo name, whether its cross-validated LR exceeds 1.
+    """For detectors calibrated on their score: per photo name, whether its cross-validated LR supports Hp.
 
     The operating point of a detector that states no test (it decides
-    nothing itself): "the calibrated finding supports Hp". Empty when lir is
-    absent or the rows hold one proposition only.
+    nothing itself): "the calibrated finding supports Hp" as the report's
+    verbal scale reads it, an LR of :data:`.model.WEAK_SUPPORT_LR` or more
+    ("weak support" or stronger). An LR just above 1 is "no support for
+    either proposition" there, and a calibrator that found no evidence in
+    the data hovers around 1: counting it as a flag would call a detector
+    that says nothing a frequent accuser. Empty when lir is absent or the
+    rows hold one proposition only.
     """
     names = sorted(d for d, kind in features.items() if kind == "score")
     cases = cases_from_rows(rows)
@@ -282,7 +287,8 @@ def supports_hp(rows: Sequence[dict[str, Any]], features: Mapping[str, str]) -> 
         return {}
     present = [d for d in names if any(d in c.p_values for c in cases)]
     per, _ = cross_validated(sorted({d for c in cases for d in c.p_values}), cases, features)
-    return {d: {c.name: bool(per[d][i] > 0.0) for i, c in enumerate(cases)} for d in present}
+    least = math.log10(WEAK_SUPPORT_LR)
+    return {d: {c.name: bool(per[d][i] >= least) for i, c in enumerate(cases)} for d in present}
 
 
 def _costs_entry(llrs: np.ndarray, y: np.ndarray) -> dict[str, Any]:

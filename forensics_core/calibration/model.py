@@ -227,13 +227,18 @@ def load_shipped() -> CalibrationSet | None:
     return from_dict(json.loads(resource.read_text(encoding="utf-8")))
 
 
+WEAK_SUPPORT_LR = 2.0
+"""The least LR that the verbal scale reads as support (ENFSI's "weak support"); below it and above 1/2,
+"no support for either proposition"."""
+
+
 def verbal(log10_lr: float) -> str:
     """ENFSI's verbal equivalent of an LR (Guideline for Evaluative Reporting, 2015, p. 17), for either side."""
     lr = 10.0 ** abs(log10_lr)
     steps: Sequence[tuple[float, str]] = ((1_000_000.0, "extremely strong"), (10_000.0, "very strong"),
-                                          (1_000.0, "strong"),
-                                          (100.0, "moderately strong"), (10.0, "moderate"), (2.0, "weak"))
-    if lr < 2.0:
+                                          (1_000.0, "strong"), (100.0, "moderately strong"), (10.0, "moderate"),
+                                          (WEAK_SUPPORT_LR, "weak"))
+    if lr < WEAK_SUPPORT_LR:
         return "no support for either proposition (the findings are about as probable under both)"
     words = next(w for bound, w in steps if lr >= bound)
     side = "Hp (manipulation)" if log10_lr > 0 else "Hd (as the camera produced it)"

@@ -279,7 +279,7 @@ def compute_methods(
 
     A detector's own operating point is "p-value below ``alpha``" (its test at
     the fusion level, before any correction); for one calibrated on its
-    score, "cross-validated LR above 1" where ``supports_hp`` gives it (photo
+    score, "cross-validated LR of 2 or more" where ``supports_hp`` gives it (photo
     name -> bool, :func:`forensics_core.calibration.fit.supports_hp`); for
     any other that states no p-value, "score above 0". The verdict's is
     "inconsistent".
@@ -290,7 +290,8 @@ def compute_methods(
         with_p = any(r.detectors[name].p_value is not None for r in taken if name in r.detectors)
         by_lr = (supports_hp or {}).get(name) if not with_p else None
         rule = (f"p-value below {alpha:g}" if with_p else
-                "calibrated LR above 1 (cross-validated by scene)" if by_lr is not None else "score above 0")
+                "calibrated LR of 2 or more, weak support or stronger (cross-validated by scene)" if by_lr is not None
+                else "score above 0")
 
         def row(r: CaseResult) -> _Row:
             d = r.detectors.get(name)
