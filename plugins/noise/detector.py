@@ -65,8 +65,9 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
     -------
     DetectorResult
         ``inconclusive`` when fewer than ``min_blocks`` blocks can be
-        compared (a small photo, or one mostly clipped to black or white) or
-        when no window can be measured; otherwise ``ok`` with ``score`` =
+        compared (a small photo, or one mostly clipped to black or white),
+        when all of them have the same fine-grain energy (no noise at all),
+        or when no window can be measured; otherwise ``ok`` with ``score`` =
         ``min(score_cap, |deviation|) / score_cap`` of the most deviant window.
 
     Examples
@@ -89,6 +90,12 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
             f"Inconclusive: {details['valid_blocks']} blocks of 8 x 8 pixels are neither clipped to black or white "
             f"nor past the edge; {params['min_blocks']} are needed to compare noise between regions.",
             details=details)
+    if np.ptp(features.energy[features.valid]) == 0:
+        details["elapsed_s"] = round(time.perf_counter() - t, 4)
+        return DetectorResult(
+            Status.INCONCLUSIVE,
+            "Inconclusive: every block has the same fine-grain energy (a synthetic or flattened picture without "
+            "noise), so there is no noise to compare between regions.", details=details)
     z, used = standardised(features, int(params["intensity_bins"]), int(params["texture_bins"]),
                            int(params["min_cell_blocks"]), float(params["scale_floor"]), float(params["z_clip"]))
     windows, spreads = scan(z, used, tuple(int(f) for f in params["window_fractions"]),
@@ -111,9 +118,9 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
         "elapsed_s": round(time.perf_counter() - t, 4),
     })
     px = BLOCK * best.size
-    kind = "noisier" if best.deviation > 0 else "smoother"
+    kind = "noisier than" if best.deviation > 0 else "smoother than" if best.deviation < 0 else "as noisy as"
     summary = (f"The window departing most is {px} x {px} pixels at ({BLOCK * best.col}, {BLOCK * best.row}): "
-               f"{kind} than content of like grey level and texture elsewhere, {abs(best.deviation):.1f} times the "
+               f"{kind} content of like grey level and texture elsewhere, {abs(best.deviation):.1f} times the "
                f"spread of the photo's own windows of that size. "
                + (f"{len(listed)} window(s) depart by {params['list_threshold']} or more. " if listed else
                   f"No window departs by {params['list_threshold']} or more. ")

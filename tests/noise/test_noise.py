@@ -86,6 +86,16 @@ def test_a_tiny_photo_is_inconclusive_with_the_reason(tmp_path):
     assert r.details["valid_blocks"] == 64 and "256 are needed" in r.summary, r.summary
 
 
+def test_a_picture_without_any_grain_is_inconclusive(tmp_path):
+    from PIL import Image
+
+    flat = np.full((400, 600), 128, np.uint8)
+    flat[:, :300] = 255
+    Image.fromarray(flat).save(tmp_path / "flat.png")
+    r = analyse(load_evidence(tmp_path / "flat.png"), DEFAULT_PARAMS)
+    assert r.status is Status.INCONCLUSIVE and r.score is None and "no noise to compare" in r.summary, r.summary
+
+
 def test_same_photo_same_findings(tmp_path):
     rng = np.random.default_rng(4)
     spliced, _ = paste(scene(rng, (640, 480), 3.0), rng, "noisier", 3.0)
