@@ -27,6 +27,11 @@ from .blocks import BlockFeatures
 _MAD_TO_SD = 1.4826
 
 
+def robust_spread(x: np.ndarray) -> float:
+    """1.4826 times the median absolute deviation: the standard deviation for normal data, robust to outliers."""
+    return _MAD_TO_SD * float(np.median(np.abs(x - np.median(x))))
+
+
 def _equal_count_bins(x: np.ndarray, n: int) -> np.ndarray:
     """Bin index 0..n-1 of each value, by the values' own quantiles."""
     return np.digitize(x, np.quantile(x, np.linspace(0.0, 1.0, n + 1)[1:-1]))
@@ -72,9 +77,8 @@ def standardised(features: BlockFeatures, intensity_bins: int, texture_bins: int
         if members.size < min_cell_blocks:
             continue
         e = energy[members]
-        centre = np.median(e)
-        scale = max(_MAD_TO_SD * float(np.median(np.abs(e - centre))), scale_floor)
-        z[members] = np.clip((e - centre) / scale, -z_clip, z_clip)
+        scale = max(robust_spread(e), scale_floor)
+        z[members] = np.clip((e - np.median(e)) / scale, -z_clip, z_clip)
         keep[members] = True
     out = np.zeros(valid.shape, np.float32)
     used = np.zeros(valid.shape, bool)

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-_MAD_TO_SD = 1.4826
+from .residuals import robust_spread
 
 
 @dataclass(frozen=True)
@@ -101,7 +101,7 @@ def scan(z: np.ndarray, used: np.ndarray, fractions: tuple[int, ...], min_size: 
             continue
         means = total[ok] / n[ok]
         centre = float(np.median(means))
-        spread = max(_MAD_TO_SD * float(np.median(np.abs(means - centre))), 1.0 / size)
+        spread = max(robust_spread(means), 1.0 / size)
         spreads[size] = round(spread, 4)
         rows, cols = np.nonzero(ok)
         dev = (means - centre) / spread
