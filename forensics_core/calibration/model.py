@@ -14,7 +14,7 @@ A detector's LR is ``10 ** (a + b x)`` with ``x = -log10 p`` (its p-value,
 or ``min(1, NFA)``, capped at :data:`FEATURE_CAP`), clipped to the ELUB
 bounds of its calibration data (Vergeer et al. 2016): no LR claims more than
 the validation data can support. A detector that states no test but a
-measured ``score`` (e.g. copy_move's fine-grain identity) is calibrated on
+measured ``score`` (e.g. copy_move's grain peak) is calibrated on
 that score instead (``x = score``; the calibrator's ``feature`` says which).
 A detector that declines (status other than ``ok``, or no value of its
 feature) gives LR = 1. The fused LR is a logistic-regression

@@ -17,7 +17,8 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
     rows = [{
         "id": h["id"], "inliers": h["n_inliers"], "scale": f"{h['scale']:.3f}",
         "rotation": f"{h['rotation_deg']:.1f}°", "shift": "{:.0f}, {:.0f}".format(*h["translation_px"]),
-        "identity": "–" if h["identity"] is None else f"{h['identity']:.2f}", "windows": h["n_windows"],
+        "identity": "–" if h["identity"] is None else f"{h['identity']:.2f}",
+        "peak": "–" if h.get("grain_peak") is None else f"{h['grain_peak']:.2f}", "windows": h["n_windows"],
         "identical": len(h["identical_windows_px"]), "best": h["id"] == d.get("best"),
     } for h in d.get("hypotheses", [])]
     figures = {}
@@ -25,8 +26,8 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
         figures["overlay"] = Figure(
             overlay_png(evidence.luma, d), "image/png",
             "The best candidate copy: matched keypoints joined by yellow lines; red, windows of one region whose "
-            "fine grain correlates with the other's at r ≥ "
-            f"{finding.parameters.get('identical_window_r', 0.5)}; blue, where they come from under the transform. "
+            "grain peak with the other's is "
+            f"{finding.parameters.get('identical_window_peak', 0.2)} or more; blue, where they come from under the transform. "
             "Which of the two is the copy cannot be told from the match alone.")
     context = {
         "n_keypoints": d.get("n_keypoints"), "n_matches": d.get("n_matches"),

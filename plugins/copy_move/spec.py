@@ -11,7 +11,7 @@ from typing import Any
 from forensics_core import DetectorSpec
 
 NAME = "copy_move"
-VERSION = "1.1.0"
+VERSION = "1.2.0"
 REFERENCES = (
     "I. Amerini, L. Ballan, R. Caldelli, A. Del Bimbo, G. Serra, A SIFT-based forensic method for copy-move attack "
     "detection and transformation recovery, IEEE Trans. Information Forensics and Security 6(3), 2011, "
@@ -35,7 +35,7 @@ DEFAULT_PARAMS: dict[str, Any] = {
     "ransac_threshold_px": 3.0,
     "refine_max_shift_px": 4.0,
     "window_px": 16,
-    "identical_window_r": 0.3,
+    "identical_window_peak": 0.2,
     "max_points_listed": 200,
 }
 
@@ -43,8 +43,9 @@ SPEC = DetectorSpec(
     name=NAME,
     version=VERSION,
     description="Finds regions copied within the photo (SIFT matches under one similarity transform) and measures "
-                "whether their fine grain is identical, as a copy's is, or only their structure, as in a scene "
-                "that repeats itself.",
+                "whether they share their fine grain, which correlates sharply at the alignment as a copy's does, "
+                "or only their structure, whose correlation persists along its edges as in a scene that repeats "
+                "itself.",
     references=REFERENCES,
     default_params=DEFAULT_PARAMS,
     calibrated_on="score",

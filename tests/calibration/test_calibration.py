@@ -199,7 +199,7 @@ def test_relevance_says_whether_the_photo_lies_within_the_calibration_data(photo
 
 
 def test_a_detector_that_states_no_p_value_is_calibrated_on_its_score(tmp_path):
-    """A measured statistic without a test (copy_move's fine-grain identity) gets an LR from its score."""
+    """A measured statistic without a test (copy_move's grain peak) gets an LR from its score."""
     path = _record(tmp_path)
     record = json.loads(path.read_text())
     rng = np.random.default_rng(3)

@@ -25,15 +25,21 @@ def results():
     return out
 
 
+def _peak(result):
+    """The best candidate's grain peak; 0 when no candidate copy could be compared (no score, LR 1)."""
+    return result.details.get("grain_peak") or 0.0
+
+
 def test_clones_share_their_fine_grain_and_repetitive_scenes_do_not(results):
-    # No score: no candidate copy to compare (LR 1).
-    clones = [r.score or 0.0 for c, r in results if c.spliced]
-    originals = [r.score or 0.0 for c, r in results if not c.spliced]
+    clones = [_peak(r) for c, r in results if c.spliced]
+    originals = [_peak(r) for c, r in results if not c.spliced]
     print(f"\nclones {np.round(clones, 2)}\noriginals {np.round(originals, 2)}")
     assert all(r.status is Status.OK and r.p_value is None and r.nfa is None for _, r in results)
-    # A scaled copy whose keypoints do not survive the resampling is missed (score 0), never the reverse.
-    assert sum(s > 0.2 for s in clones) >= 8
-    assert max(originals) < 0.1
+    # Shifted and rotated copies keep a grain peak; a copy enlarged and then saved at JPEG quality 85 keeps
+    # too little of its grain to stand out from its structure and is missed (a peak near 0), never the reverse.
+    kinds = [c.conditions["kind"] for c, _ in results if c.spliced]
+    assert all(s > 0.1 for s, kind in zip(clones, kinds) if kind != "copy_scale")
+    assert max(originals) < 0.05
 
 
 def test_the_transform_and_the_copy_are_recovered(results):
@@ -50,9 +56,11 @@ def test_the_transform_and_the_copy_are_recovered(results):
             assert abs(np.log(best["scale"])) > np.log(1.05)
         mask = regions_mask(r.details, case.mask.shape)
         # The mask covers the copy and its source. A shifted copy keeps its grain exactly, so most of it is
-        # found; resampling (rotation, scaling) weakens the grain and only part of the copy passes r >= 0.3.
+        # found; rotation weakens the grain and only part of the copy has a grain peak of 0.2 or more. The
+        # enlarged copies saved at quality 85 have almost none (see above): their transform is what is found.
         covered = (mask & case.mask).sum() / case.mask.sum()
-        assert covered >= (0.3 if kind == "copy_translation" else 0.03)
+        if kind != "copy_scale":
+            assert covered >= (0.3 if kind == "copy_translation" else 0.03)
 
 
 def test_identical_design_with_independent_grain_is_not_a_copy():
@@ -60,7 +68,7 @@ def test_identical_design_with_independent_grain_is_not_a_copy():
     rng = np.random.default_rng(5)
     img = scene(rng, (600, 800))
     r = analyse(_luma(encode(img, 92)), DEFAULT_PARAMS)
-    assert (r.score or 0.0) < 0.1
+    assert _peak(r) < 0.1
 
 
 def test_a_flat_photo_is_inconclusive_not_clean():
@@ -83,7 +91,7 @@ def test_the_detector_is_advisory_to_the_triage_rule(tmp_path):
     path.write_bytes(encode(cloned, 90))
     findings = analyze(path, ["copy_move"], isolation="inline")
     (finding,) = findings.detectors
-    assert finding.status is Status.OK and finding.score > 0.2
+    assert finding.status is Status.OK and finding.details["grain_peak"] > 0.2
     assert [c.role.value for c in findings.verdict.contributions] == ["advisory"]
     assert findings.verdict.label.value == "inconclusive"
 
@@ -101,7 +109,7 @@ def test_through_the_entry_point_with_its_report_section(tmp_path):
     path.write_bytes(encode(cloned, 90))
     ev = load_evidence(path)
     (finding,) = analyze_evidence(ev, host, Options(detectors=["copy_move"], isolation="process")).detectors
-    assert finding.status is Status.OK and finding.score > 0.2, finding.error or finding.summary
+    assert finding.status is Status.OK and finding.details["grain_peak"] > 0.2, finding.error or finding.summary
     section = section_for(host, finding, ev)
     assert section.failure is None
     body = str(section.body)
