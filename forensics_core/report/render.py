@@ -13,6 +13,7 @@ import base64
 import hashlib
 import json
 import logging
+import math
 import shlex
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -24,6 +25,7 @@ from typing import Any
 from jinja2 import Environment, FunctionLoader, StrictUndefined
 from markupsafe import Markup
 
+from ..calibration.model import WEAK_SUPPORT_LR
 from ..defaults import PAPER_SIZES
 from ..evidence import Evidence
 from ..findings import ExifSummary, Findings
@@ -269,11 +271,11 @@ def _summary(findings: Findings) -> dict[str, Any]:
         "drivers": verdict.drivers,
         "rows": rows,
         "scale": wording.scale() if strength.graded else (),
-        "lr": _lr_summary(verdict),
+        "lr": _lr_summary(verdict, findings.detectors),
     }
 
 
-def _lr_summary(verdict) -> dict[str, Any] | None:
+def _lr_summary(verdict, detectors) -> dict[str, Any] | None:
     """Page 1's evaluative statement: propositions, the fused LR in words, who contributed, the data behind it."""
     lr = verdict.likelihood_ratio
     if lr is None:
@@ -284,9 +286,19 @@ def _lr_summary(verdict) -> dict[str, Any] | None:
         sentence = (f"The findings are {wording.lr_words(lr.log10_lr)} if {lr.hp} (Hp) than if {lr.hd} (Hd): "
                     f"likelihood ratio {10.0 ** lr.log10_lr:.3g}, {lr.verbal}.")
     cllr = cal.get("cllr_fused")
+    # A detector whose LR is not 1 but within the scale's "no support" band
+    # (a calibrator with no measured power gives such LRs on every photo)
+    # is named apart, so that the list says who carries the evidence.
+    weak = math.log10(WEAK_SUPPORT_LR)
+    own = {d.name: d.log10_lr for d in detectors}
+    supporting = [n for n in lr.contributed if abs(own.get(n) or 0.0) >= weak]
+    slight = [n for n in lr.contributed if n not in supporting]
     return {
         "hp": lr.hp, "hd": lr.hd, "sentence": sentence, "verbal": lr.verbal,
-        "contributed": ", ".join(lr.contributed) or "none (every calibrated detector gave LR 1)",
+        "contributed": ", ".join(supporting) or "none",
+        "slight": ", ".join(slight),
+        "band": f"between 1/{WEAK_SUPPORT_LR:g} and {WEAK_SUPPORT_LR:g}",
+        "threshold": f"{WEAK_SUPPORT_LR:g}",
         "uncalibrated": ", ".join(lr.uncalibrated),
         "relevance": lr.relevance,
         "performance": (f"Cross-validated on that data ({cal.get('cross_validation')}), the fused LR's cost Cllr is "

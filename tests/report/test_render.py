@@ -270,3 +270,21 @@ def test_large_photo_keeps_the_pdf_small(tmp_path, key):
     Image.fromarray(pixels).save(photo, "JPEG", quality=90)
     folder = make_bundle(photo, tmp_path / "big", key)
     assert (folder / "report.pdf").stat().st_size < 10 * 1024 * 1024
+
+
+def test_page_one_names_apart_the_detectors_whose_likelihood_ratio_is_within_the_no_support_band():
+    from forensics_core.findings import DetectorFinding, LikelihoodRatio, Status
+    from forensics_core.fusion import likelihood_ratio
+    from forensics_core.report.render import _lr_summary
+
+    findings = []
+    for name, log10_lr in (("strong", 0.6), ("against", -0.4), ("faint", -0.02), ("none", 0.0)):
+        finding = DetectorFinding(name, "1", "p", Status.OK, "s", 0.5, None, None, {}, {}, 0.1)
+        finding.log10_lr = log10_lr
+        findings.append(finding)
+    verdict = likelihood_ratio(findings)
+    verdict.likelihood_ratio = LikelihoodRatio(hp="h", hd="d", log10_lr=0.18, verbal="weak",
+                                               contributed=["against", "faint", "strong"])
+    summary = _lr_summary(verdict, findings)
+    assert summary["contributed"] == "against, strong" and summary["slight"] == "faint"
+    assert summary["band"] == "between 1/2 and 2"
