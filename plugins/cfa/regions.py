@@ -57,6 +57,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from forensics_core import integral_image
+
 from .significance import log10_binom_tail, log10_chernoff
 
 KINDS = ("diagonal", "red_blue")
@@ -166,14 +168,6 @@ def count_tests(ny: int, nx: int) -> int:
     return sum(len(range(0, ny - h + 1, sy)) * len(range(0, nx - w + 1, sx)) for h, w, sy, sx in _shapes(ny, nx))
 
 
-def _integral(a: np.ndarray) -> np.ndarray:
-    dtype = np.float64 if a.dtype.kind == "f" else np.int64
-    out = np.zeros((a.shape[0] + 1, a.shape[1] + 1), dtype=dtype)
-    out[1:, 1:] = a.astype(dtype).cumsum(0).cumsum(1)
-    return out
-
-
-
 def _window_counts(ii: np.ndarray, ys: np.ndarray, xs: np.ndarray, h: int, w: int) -> np.ndarray:
     return (ii[np.ix_(ys + h, xs + w)] - ii[np.ix_(ys, xs + w)]
             - ii[np.ix_(ys + h, xs)] + ii[np.ix_(ys, xs)])
@@ -200,10 +194,10 @@ def _significant_windows(q: Question, log10_tests: float, log10_eps: float):
     best : float
     """
     ny, nx = q.disagree.shape
-    ik = _integral(q.disagree & q.voting)
-    iv = _integral(q.voting)
+    ik = integral_image(q.disagree & q.voting)
+    iv = integral_image(q.voting)
     null = np.full((ny, nx), 0.5) if q.null is None else q.null
-    iq = _integral(np.where(q.voting, null, 0.0))
+    iq = integral_image(np.where(q.voting, null, 0.0))
     found: list[tuple[np.ndarray, ...]] = []
     best = 0.0
     for h, w, sy, sx in _shapes(ny, nx):
@@ -284,7 +278,7 @@ def scan(questions: list[Question], nfa_threshold: float) -> Scan:
         if not len(nfas):
             continue
         against = q.disagree & q.voting
-        k_all = _window_sums(_integral(against), win)
+        k_all = _window_sums(integral_image(against), win)
         cover = _union(win, (ny, nx))
         labels, count = ndimage.label(cover & (against | _local_majority(q)), structure=np.ones((3, 3), dtype=bool))
         # A significant window holds at least log2(N_tests / eps) disagreeing
@@ -298,7 +292,7 @@ def scan(questions: list[Question], nfa_threshold: float) -> Scan:
             # A region is supported by the windows whose disagreeing votes lie
             # mostly inside it, not by a window that owes its significance to
             # a neighbouring region.
-            own = 2 * _window_sums(_integral(blocks & against), win) >= k_all
+            own = 2 * _window_sums(integral_image(blocks & against), win) >= k_all
             if not own.any():
                 continue
             j = int(np.argmin(np.where(own, nfas, np.inf)))

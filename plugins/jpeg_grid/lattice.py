@@ -45,6 +45,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from forensics_core import box_sums
+
 from .nfa import log10_binomial_tail
 from .zeros import dct_matrix
 
@@ -343,15 +345,6 @@ def expected_flags(counts: OffLattice, brightness: np.ndarray) -> np.ndarray:
     return np.where(t, rate[kind], 0.0)
 
 
-def _box_sums(a: np.ndarray, size: int, step: int) -> np.ndarray:
-    """Sums of ``a`` over ``size`` x ``size`` windows whose corners are ``step`` apart."""
-    c = np.pad(np.cumsum(np.cumsum(a, axis=0), axis=1), ((1, 0), (1, 0)))
-    h, w = a.shape
-    r = np.arange(0, h - size + 1, step)
-    q = np.arange(0, w - size + 1, step)
-    return c[np.ix_(r + size, q + size)] - c[np.ix_(r, q + size)] - c[np.ix_(r + size, q)] + c[np.ix_(r, q)]
-
-
 def _overdispersion(k: np.ndarray, n: np.ndarray, e: np.ndarray) -> float | None:
     """Variance of window counts about their expectation, in units of the binomial's, robustly; None if too few.
 
@@ -412,7 +405,7 @@ def missing_regions(counts: OffLattice, brightness: np.ndarray) -> list[MissingR
     for s in WINDOW_SIDES:
         if s > min(h, w):
             break
-        k, n, e = (_box_sums(a.astype(np.float64), s, s // 2) for a in (flagged, testable, rate))
+        k, n, e = (box_sums(a.astype(np.float64), s, s // 2) for a in (flagged, testable, rate))
         phi = _overdispersion(k, n, e)
         if phi is not None:
             grids.append((s, k, n, e, phi))

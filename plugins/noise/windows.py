@@ -29,6 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from forensics_core import box_sums
+
 from .residuals import robust_spread
 
 
@@ -54,15 +56,6 @@ class Window:
     n: int
     mean_z: float
     deviation: float
-
-
-def _box_sums(a: np.ndarray, size: int, step: int) -> np.ndarray:
-    """Sums of ``a`` over size x size windows whose top-left corners are ``step`` apart, shape (m, n)."""
-    s = np.zeros((a.shape[0] + 1, a.shape[1] + 1))
-    s[1:, 1:] = np.cumsum(np.cumsum(a, axis=0, dtype=np.float64), axis=1)
-    r = np.arange(0, a.shape[0] - size + 1, step)
-    c = np.arange(0, a.shape[1] - size + 1, step)
-    return s[r[:, None] + size, c + size] - s[r[:, None], c + size] - s[r[:, None] + size, c] + s[r[:, None], c]
 
 
 def scan(z: np.ndarray, used: np.ndarray, fractions: tuple[int, ...], min_size: int,
@@ -94,8 +87,8 @@ def scan(z: np.ndarray, used: np.ndarray, fractions: tuple[int, ...], min_size: 
         if size > min(z.shape) or size in spreads:
             continue
         step = max(size // 2, 1)
-        n = _box_sums(used.astype(np.float64), size, step)
-        total = _box_sums(z.astype(np.float64), size, step)
+        n = box_sums(used.astype(np.float64), size, step)
+        total = box_sums(z.astype(np.float64), size, step)
         ok = n >= min_used_share * size * size
         if ok.sum() < 5:
             continue
