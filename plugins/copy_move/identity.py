@@ -98,7 +98,7 @@ class Identity:
         ``(x0, y0, C(0), g)`` of each compared window of the target region:
         top-left corner (work-image pixels), correlation and grain peak.
     window : int
-        Window side, pixels.
+        Window side, work-image pixels.
     """
 
     median: float
