@@ -1,8 +1,8 @@
 """The copy_move detector: keypoint matches, their similarity transforms, and the fine-grain test.
 
-The finding states no p-value: the fine grain's peak (:mod:`.identity`),
-how much sharper the two regions' grain correlates at their alignment than
-one pixel away, is a measured statistic, reported as the detector's ``score``, whose
+The finding states no p-value: the grain peak (:mod:`.identity`), how much
+sharper the two regions' grain correlates at their alignment than one pixel
+away, is a measured statistic, reported as the detector's ``score``, whose
 strength is the likelihood ratio calibrated on real photos. Under the
 Bonferroni triage rule the detector is therefore advisory (it never drives
 the label on its own); under the likelihood-ratio policy its calibrated LR
@@ -108,9 +108,10 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     -------
     DetectorResult
         ``ok`` with ``score`` = the largest grain peak over the candidate
-        copies (clipped to [0, 1]) and no p-value; ``ok`` with no score when no candidate copy could be compared (the calibrated LR is
-        then 1: finding no clone says nothing about a splice or a removal,
-        which Hp covers as well); ``inconclusive`` with too few keypoints.
+        copies (clipped to [0, 1]) and no p-value; ``ok`` with no score when
+        no candidate copy could be compared (the calibrated LR is then 1:
+        finding no clone says nothing about a splice or a removal, which Hp
+        covers as well); ``inconclusive`` with too few keypoints.
     """
     marks: dict[str, float] = {}
     t = time.perf_counter()
