@@ -83,12 +83,14 @@ def _summary(status: Status, n_keypoints: int, records: list[dict[str, Any]], be
             "no pair of regions related by one transform"
         return (f"No copied region found: {n_keypoints} keypoints, {tested}. This method does not see copies of "
                 f"flat or smooth areas, which carry no keypoints.")
+    peak = best["grain_peak"]
+    away = (f"that correlation falls by {peak:.2f} times as much as the grain's own" if peak > 0 else
+            "that correlation does not fall below its value at the alignment")
     return (f"Regions related by a similarity transform (scale {best['scale']:.2f}, rotation "
             f"{best['rotation_deg']:.0f}°, shift {best['translation_px'][0]:.0f}, {best['translation_px'][1]:.0f} px; "
             f"{best['n_inliers']} matched keypoints) have fine grain correlating at a median of "
-            f"{best['identity']:.2f} over {best['n_windows']} windows, and a grain peak of {best['grain_peak']:.2f}: "
-            f"one pixel away, in the direction where it persists most, that correlation falls by "
-            f"{best['grain_peak']:.2f} times as much as the grain's own. Noise shared by a copy falls with the grain "
+            f"{best['identity']:.2f} over {best['n_windows']} windows, and a grain peak of {peak:.2f}: one pixel "
+            f"away, in the direction where it persists most, {away}. Noise shared by a copy falls with the grain "
             f"(a peak near the copy's fidelity, up to 1); a structure repeated in the scene keeps its correlation "
             f"along its edges (near 0), except printed or manufactured repetition. Its strength is the "
             f"calibrated likelihood ratio.")
