@@ -1,4 +1,5 @@
-"""The copy_move detector: keypoint matches, their similarity transforms, and the fine-grain test.
+"""The copy_move detector: candidate copies (keypoint matches under one transform, and moves of smooth areas
+found by their grain), then the fine-grain test.
 
 The finding states no p-value: the grain peak (:mod:`.identity`), how much
 sharper the two regions' grain correlates at their alignment than one pixel
@@ -20,10 +21,15 @@ import numpy as np
 
 from forensics_core import DetectorResult, Status
 
+from .dense import DenseCandidate, translations
 from .identity import Identity, identity, residual, target_region
 from .keypoints import self_matches, work_image
+from .spec import GRAIN, KEYPOINTS
 from .transforms import Hypothesis, hypotheses, refine
 
+# A dense move this close (pixels) to a keypoints' transform without rotation
+# or scaling is the same candidate, already compared.
+_SAME_MOVE_PX = 3.0
 
 
 def _full_matrix(h: Hypothesis, scale: float) -> list[list[float]]:
@@ -46,8 +52,16 @@ def _aligned(gray: np.ndarray, grain: np.ndarray, h: Hypothesis,
     return best, found, how
 
 
+def _new_moves(found: list[Hypothesis], dense: list[DenseCandidate]) -> list[DenseCandidate]:
+    """The dense candidates whose move no keypoints' transform already makes (either way round)."""
+    moves = [h.matrix[:, 2] for h in found if abs(h.scale - 1.0) < 0.01 and abs(h.rotation_deg) < 0.5]
+    return [c for c in dense
+            if not any(min(np.hypot(*(c.hypothesis.matrix[:, 2] - m)), np.hypot(*(c.hypothesis.matrix[:, 2] + m)))
+                       <= _SAME_MOVE_PX for m in moves)]
+
+
 def _record(i: int, h: Hypothesis, found: Identity | None, aligned: str, scale: float,
-            params: Mapping[str, Any]) -> dict[str, Any]:
+            params: Mapping[str, Any], found_by: str) -> dict[str, Any]:
     limit = int(params["max_points_listed"])
     windows = []
     if found is not None:
@@ -58,7 +72,9 @@ def _record(i: int, h: Hypothesis, found: Identity | None, aligned: str, scale: 
     full = _full_matrix(h, scale)
     return {
         "id": i,
-        "n_inliers": int(len(h.source)),
+        "found_by": found_by,
+        "n_inliers": int(len(h.source)) if found_by == KEYPOINTS else None,
+        "matches_log10_nfa": round(h.log10_nfa, 1) if np.isfinite(h.log10_nfa) else None,
         "scale": round(h.scale, 4),
         "rotation_deg": round(h.rotation_deg, 2),
         "translation_px": [round(full[0][2], 1), round(full[1][2], 1)],
@@ -77,18 +93,23 @@ def _summary(status: Status, n_keypoints: int, records: list[dict[str, Any]], be
              min_keypoints: int) -> str:
     if status is Status.INCONCLUSIVE:
         return (f"Inconclusive: {n_keypoints} keypoints, at least {min_keypoints} needed to search the photo for "
-                f"copied regions (a flat or very small photo).")
+                f"copied regions (a flat or very small photo), and no smooth area whose grain repeats.")
     if best is None:
         tested = f"{len(records)} candidate pair(s) of regions, none with grain to compare" if records else \
-            "no pair of regions related by one transform"
-        return (f"No copied region found: {n_keypoints} keypoints, {tested}. This method does not see copies of "
-                f"flat or smooth areas, which carry no keypoints.")
+            "no pair of regions related by one transform, and no smooth area whose grain repeats"
+        return (f"No copied region found: {n_keypoints} keypoints, {tested}. This method does not see rotated or "
+                f"scaled copies of smooth areas, which carry no keypoints, nor copies of areas the compression "
+                f"left without grain.")
     peak = best["grain_peak"]
     away = (f"that correlation falls by {peak:.2f} times as much as the grain's own" if peak > 0 else
             "that correlation does not fall below its value at the alignment")
-    return (f"Regions related by a similarity transform (scale {best['scale']:.2f}, rotation "
-            f"{best['rotation_deg']:.0f}°, shift {best['translation_px'][0]:.0f}, {best['translation_px'][1]:.0f} px; "
-            f"{best['n_inliers']} matched keypoints) have fine grain correlating at a median of "
+    shift = f"shift {best['translation_px'][0]:.0f}, {best['translation_px'][1]:.0f} px"
+    how = (f"Regions related by a similarity transform (scale {best['scale']:.2f}, rotation "
+           f"{best['rotation_deg']:.0f}°, {shift}; {best['n_inliers']} matched keypoints, NFA "
+           f"10^{best['matches_log10_nfa']:.0f})"
+           if best["found_by"] == KEYPOINTS else
+           f"Two smooth areas whose grain repeats under a move ({shift}; found by the grain's autocorrelation)")
+    return (f"{how} have fine grain correlating at a median of "
             f"{best['identity']:.2f} over {best['n_windows']} windows, and a grain peak of {peak:.2f}: one pixel "
             f"away, in the direction where it persists most, {away}. Noise shared by a copy falls with the grain "
             f"(a peak near the copy's fidelity, up to 1); a structure repeated in the scene keeps its correlation "
@@ -113,7 +134,8 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
         copies (clipped to [0, 1]) and no p-value; ``ok`` with no score when
         no candidate copy could be compared (the calibrated LR is then 1:
         finding no clone says nothing about a splice or a removal, which Hp
-        covers as well); ``inconclusive`` with too few keypoints.
+        covers as well); ``inconclusive`` with too few keypoints and no
+        smooth area whose grain repeats.
     """
     marks: dict[str, float] = {}
     t = time.perf_counter()
@@ -123,18 +145,31 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     marks["keypoints"] = round(time.perf_counter() - t, 4)
     t = time.perf_counter()
     found = hypotheses(matches.pairs, int(params["max_hypotheses"]), int(params["min_inliers"]),
-                       float(params["ransac_threshold_px"]))
+                       float(params["ransac_threshold_px"]), float(gray.size))
     marks["transforms"] = round(time.perf_counter() - t, 4)
     t = time.perf_counter()
-    grain = residual(gray) if found else None
-    records = [_record(i + 1, *_aligned(gray, grain, h, params), scale, params) for i, h in enumerate(found)]
+    grain = residual(gray)
+    dense = _new_moves(found, translations(
+        gray, grain, window=int(params["window_px"]), min_distance=float(params["min_distance_px"]),
+        smooth_ratio=float(params["dense_smooth_ratio"]), min_sigma=float(params["dense_min_sigma"]),
+        threshold=float(params["dense_threshold"]), max_candidates=int(params["dense_max_candidates"])))
+    marks["grain_autocorrelation"] = round(time.perf_counter() - t, 4)
+    t = time.perf_counter()
+    candidates = [(h, KEYPOINTS) for h in found] + [(c.hypothesis, GRAIN) for c in dense]
+    records = [_record(i + 1, *_aligned(gray, grain, h, params), scale, params, how)
+               for i, (h, how) in enumerate(candidates)]
+    for record, c in zip(records[len(found):], dense):
+        record["grain_sigma"] = round(c.sigma, 1)
+        record["area_px"] = round(c.area_px / scale**2)
     marks["identity"] = round(time.perf_counter() - t, 4)
     compared = [r for r in records if r["identity"] is not None]
     best = max(compared, key=lambda r: r["grain_peak"]) if compared else None
-    status = Status.OK if matches.n_keypoints >= int(params["min_keypoints"]) else Status.INCONCLUSIVE
+    searched = matches.n_keypoints >= int(params["min_keypoints"]) or any(r["found_by"] == GRAIN for r in compared)
+    status = Status.OK if searched else Status.INCONCLUSIVE
     details = {
         "n_keypoints": matches.n_keypoints,
         "n_matches": int(len(matches.pairs)),
+        "n_dense_candidates": len(dense),
         "work_scale": round(scale, 6),
         "hypotheses": records,
         "best": None if best is None else best["id"],

@@ -15,6 +15,8 @@ from PIL import Image, ImageDraw
 
 from forensics_core.report import figure_png
 
+from .spec import GRAIN
+
 MAX_SIDE = 1200
 TARGET = (230, 40, 40)
 SOURCE = (40, 120, 255)
@@ -22,7 +24,8 @@ LINK = (255, 210, 0)
 
 
 def overlay_png(luma: np.ndarray, details: Mapping[str, Any]) -> bytes:
-    """PNG of the dimmed photo: the best hypothesis' matches (yellow lines), identical windows (red) and sources (blue)."""
+    """PNG of the dimmed photo: the best hypothesis' matches (yellow lines; for a move found by the grain, the outlines of
+    its two areas), identical windows (red) and sources (blue)."""
     h, w = luma.shape
     k = min(1.0, MAX_SIDE / max(h, w))
     grey = np.clip(np.asarray(luma, dtype=np.float32), 0, 1) * 200 + 20
@@ -38,6 +41,10 @@ def overlay_png(luma: np.ndarray, details: Mapping[str, Any]) -> bytes:
             source = square @ back[:, :2].T + back[:, 2]
             draw.polygon([tuple(p) for p in (square * k)], fill=TARGET + (90,), outline=TARGET + (255,))
             draw.polygon([tuple(p) for p in (source * k)], fill=SOURCE + (90,), outline=SOURCE + (255,))
+        if best.get("found_by") == GRAIN:
+            for outline, colour in ((best["source_px"], SOURCE), (best["target_px"], TARGET)):
+                draw.polygon([(x * k, y * k) for x, y in outline], outline=colour + (255,))
+            return figure_png(img)
         for (sx, sy), (tx, ty) in zip(best["source_px"], best["target_px"]):
             draw.line([(sx * k, sy * k), (tx * k, ty * k)], fill=LINK + (200,), width=1)
             draw.ellipse([tx * k - 2, ty * k - 2, tx * k + 2, ty * k + 2], outline=TARGET + (255,))

@@ -70,7 +70,7 @@ from .transforms import Hypothesis
 
 # Residual standard deviation (grey levels) below which a window holds no
 # grain to compare: JPEG leaves smooth areas with less than this.
-_MIN_GRAIN = 0.5
+MIN_GRAIN = 0.5
 # Floor of the own grain's drop 1 - A(s*): a window smooth along s* would
 # otherwise turn a small difference of correlations into a large peak.
 _MIN_DROP = 0.1
@@ -186,7 +186,7 @@ def identity(gray: np.ndarray, grain: np.ndarray, hypothesis: Hypothesis, window
         return np.einsum("ij,ij->i", a, b) / np.sqrt(np.maximum(energy, 1e-12))
 
     a, b = centred(_shifted(own, 0, 0)), centred(_shifted(moved, 0, 0))
-    grainy = (a.std(axis=1) > _MIN_GRAIN) & (b.std(axis=1) > _MIN_GRAIN)
+    grainy = (a.std(axis=1) > MIN_GRAIN) & (b.std(axis=1) > MIN_GRAIN)
     if grainy.sum() < 4:
         return None
     a, b = a[grainy], b[grainy]

@@ -7,7 +7,7 @@ from importlib.resources import files
 from forensics_core import DetectorFinding, Evidence
 from forensics_core.report import Figure, ReportSection
 
-from .spec import REFERENCES
+from .spec import GRAIN, REFERENCES
 from .figures import overlay_png
 
 
@@ -15,7 +15,9 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
     """The section for one copy_move finding: the overlay, the candidate copies, the method and its limits."""
     d = finding.details
     rows = [{
-        "id": h["id"], "inliers": h["n_inliers"], "scale": f"{h['scale']:.3f}",
+        "id": h["id"], "found_by": "grain" if h.get("found_by") == GRAIN else "keypoints",
+        "inliers": "–" if h["n_inliers"] is None else h["n_inliers"], "scale": f"{h['scale']:.3f}",
+        "nfa": "–" if h.get("matches_log10_nfa") is None else f"{h['matches_log10_nfa']:.0f}",
         "rotation": f"{h['rotation_deg']:.1f}°", "shift": "{:.0f}, {:.0f}".format(*h["translation_px"]),
         "identity": "–" if h["identity"] is None else f"{h['identity']:.2f}",
         "peak": "–" if h.get("grain_peak") is None else f"{h['grain_peak']:.2f}", "windows": h["n_windows"],
@@ -25,12 +27,14 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
     if d.get("best") is not None:
         figures["overlay"] = Figure(
             overlay_png(evidence.luma, d), "image/png",
-            "The best candidate copy: matched keypoints joined by yellow lines; red, windows of one region whose "
+            "The best candidate copy: matched keypoints joined by yellow lines (for a move found by the grain, the "
+            "outlines of the two smooth areas); red, windows of one region whose "
             "grain peak with the other's is "
             f"{finding.parameters.get('identical_window_peak', 0.2)} or more; blue, where they come from under the transform. "
             "Which of the two is the copy cannot be told from the match alone.")
     context = {
         "n_keypoints": d.get("n_keypoints"), "n_matches": d.get("n_matches"),
+        "n_dense": d.get("n_dense_candidates", 0),
         "work_scale": d.get("work_scale"), "rows": rows, "params": finding.parameters,
         "log10_lr": finding.log10_lr, "references": list(REFERENCES), "opencv": d.get("opencv"),
     }

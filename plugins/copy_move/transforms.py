@@ -6,6 +6,19 @@ translation), which RANSAC finds among the matches [1]_, [2]_. After each
 transform its inliers are removed and the next is sought, so several copies
 are found in turn.
 
+Each transform's matches get the a-contrario number of false alarms of
+AC-RANSAC [4]_: with ``n`` pairs left to explain, ``k`` of them within
+``eps`` pixels of where the transform puts them, and ``alpha = 2 pi eps^2 /
+area`` the chance that a pair with its second point placed at random (and
+either side taken as the source) lands within ``eps``,
+
+    NFA = (n - 2) C(n, k) C(k, 2) alpha^(k - 2),
+
+the expected number of transforms explaining as many pairs by chance. It
+tells matches that agree from a chance alignment of unrelated keypoints; a
+scene that repeats itself agrees as well as a copy does, which is for the
+grain test (:mod:`.identity`) to tell apart.
+
 Keypoint positions fix a transform to a fraction of a pixel at best; over a
 scaled or rotated copy the error grows across the region, enough to
 misalign the fine grain the copy shares with its source. :func:`refine`
@@ -22,6 +35,9 @@ References
 .. [3] G. D. Evangelidis, E. Z. Psarakis, Parametric image alignment using
    enhanced correlation coefficient maximization, IEEE TPAMI 30(10), 2008,
    pp. 1858-1865.
+.. [4] L. Moisan, P. Moulon, P. Monasse, Automatic homographic registration of
+   a pair of images, with a contrario elimination of outliers, IPOL 2, 2012,
+   pp. 56-73 (after L. Moisan, B. Stival, IJCV 57(3), 2004).
 """
 
 from __future__ import annotations
@@ -30,6 +46,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from scipy.special import gammaln
 
 
 @dataclass(frozen=True)
@@ -42,11 +59,15 @@ class Hypothesis:
         Similarity transform from source to target, work-image pixels.
     source, target : ndarray, shape (n, 2)
         The inlier keypoints on each side, work-image pixels.
+    log10_nfa : float
+        ``log10`` of the matches' number of false alarms (module docstring);
+        NaN for a candidate not found by keypoints.
     """
 
     matrix: np.ndarray
     source: np.ndarray
     target: np.ndarray
+    log10_nfa: float = float("nan")
 
     @property
     def scale(self) -> float:
@@ -57,7 +78,18 @@ class Hypothesis:
         return float(np.degrees(np.arctan2(self.matrix[1, 0], self.matrix[0, 0])))
 
 
-def hypotheses(pairs: np.ndarray, max_models: int, min_inliers: int, threshold_px: float) -> list[Hypothesis]:
+def log10_nfa(n: int, k: int, threshold_px: float, area_px: float) -> float:
+    """``log10`` of AC-RANSAC's number of false alarms for ``k`` of ``n`` pairs within ``threshold_px`` (module docstring)."""
+    alpha = min(1.0, 2.0 * np.pi * threshold_px**2 / area_px)
+
+    def log_choose(a: int, b: int) -> float:
+        return float(gammaln(a + 1) - gammaln(b + 1) - gammaln(a - b + 1))
+
+    return float((np.log(max(n - 2, 1)) + log_choose(n, k) + log_choose(k, 2) + (k - 2) * np.log(alpha)) / np.log(10))
+
+
+def hypotheses(pairs: np.ndarray, max_models: int, min_inliers: int, threshold_px: float,
+               area_px: float) -> list[Hypothesis]:
     """Similarity transforms explaining groups of keypoint pairs, strongest first.
 
     Parameters
@@ -70,6 +102,8 @@ def hypotheses(pairs: np.ndarray, max_models: int, min_inliers: int, threshold_p
         degrees of freedom, two pairs fix it; more make it a finding).
     threshold_px : float
         RANSAC's reprojection tolerance.
+    area_px : float
+        The work image's area, for the matches' number of false alarms.
 
     Notes
     -----
@@ -97,7 +131,8 @@ def hypotheses(pairs: np.ndarray, max_models: int, min_inliers: int, threshold_p
             break
         source = np.where(forward[:, None], left[:, :2], left[:, 2:])[used]
         target = np.where(forward[:, None], left[:, 2:], left[:, :2])[used]
-        out.append(Hypothesis(matrix.astype(np.float64), source.astype(np.float64), target.astype(np.float64)))
+        out.append(Hypothesis(matrix.astype(np.float64), source.astype(np.float64), target.astype(np.float64),
+                              log10_nfa(n, int(used.sum()), threshold_px, area_px)))
         left = left[~used]
     return out
 
@@ -159,5 +194,6 @@ def refine(gray: np.ndarray, hypothesis: Hypothesis, region: np.ndarray, max_shi
         return None
     refined_back = found.copy()
     refined_back[:, 2] = found[:, 2] - found[:, :2] @ np.array([x0, y0], dtype=np.float64)
-    return Hypothesis(cv2.invertAffineTransform(refined_back), hypothesis.source, hypothesis.target)
+    return Hypothesis(cv2.invertAffineTransform(refined_back), hypothesis.source, hypothesis.target,
+                      hypothesis.log10_nfa)
 

@@ -47,6 +47,7 @@ def test_the_transform_and_the_copy_are_recovered(results):
         if not case.spliced or r.details["best"] is None:
             continue
         best = next(h for h in r.details["hypotheses"] if h["id"] == r.details["best"])
+        assert best["found_by"] == "keypoints" and best["matches_log10_nfa"] < -5
         kind = case.conditions["kind"]
         if kind == "copy_translation":
             assert best["scale"] == pytest.approx(1.0, abs=0.01) and abs(best["rotation_deg"]) < 1.0
@@ -116,3 +117,12 @@ def test_through_the_entry_point_with_its_report_section(tmp_path):
     for text in ("Candidate copies", "fine grain", "Strength and limits", "Amerini", "printed"):
         assert text in body, text
     assert [f.key for f in section.figures] == ["overlay"] and section.figures[0].used
+
+
+def test_the_matches_number_of_false_alarms_falls_as_more_pairs_agree():
+    from forensics_plugins.copy_move.transforms import log10_nfa
+
+    area = 600 * 800
+    assert log10_nfa(200, 5, 3.0, area) > log10_nfa(200, 10, 3.0, area) > log10_nfa(200, 40, 3.0, area)
+    # A handful of pairs out of thousands, all within a pixel tolerance of a large one, is chance.
+    assert log10_nfa(5000, 5, 50.0, area) > 0
