@@ -36,8 +36,8 @@ Three things other than a copy also raise ``A``, and are kept out:
   blocks is left to the keypoints.
 
 A candidate is a lag whose sharpness stands ``min_sigma`` robust spreads
-above the sharpness of all lags; the ``max_candidates`` strongest are kept.
-Its copied area is where the local correlation of ``r_n(p)`` with
+above the sharpness of all lags; the ``max_candidates`` strongest are
+examined. Its copied area is where the local correlation of ``r_n(p)`` with
 ``r_n(p + t)`` over a window exceeds ``threshold``, largest connected part,
 and it enters the same grain test as the keypoints' candidates. Only moves
 (no rotation or scaling) are searched, and only moves of less than half the
@@ -168,14 +168,15 @@ def translations(gray: np.ndarray, grain: np.ndarray, *, window: int, min_distan
     threshold : float
         Local correlation that marks the copied area.
     max_candidates : int
-        Most moves returned.
+        Most moves examined (the sharpest).
 
     Returns
     -------
     list of DenseCandidate
     """
     rn = _normalised_grain(gray, grain, window, smooth_ratio)
-    if not rn.any():
+    # A copy and its source each need a window's area of smooth grain.
+    if np.count_nonzero(rn) < 2 * window * window:
         return []
     sharp, dy, dx, excluded = _sharpness(rn)
     excluded |= np.hypot(dy[:, None], dx[None, :]) < min_distance
@@ -189,9 +190,7 @@ def translations(gray: np.ndarray, grain: np.ndarray, *, window: int, min_distan
     peaks = (z >= cv2.dilate(z, _PEAK, borderType=cv2.BORDER_REFLECT)) & (z > min_sigma)
     rows, cols = np.nonzero(peaks)
     out: list[DenseCandidate] = []
-    for i in np.argsort(-z[rows, cols]):
-        if len(out) == max_candidates:
-            break
+    for i in np.argsort(-z[rows, cols])[:max_candidates]:
         ty, tx = int(dy[rows[i]]), int(dx[cols[i]])
         found = _copied_area(rn, ty, tx, window, threshold)
         if found is None:
