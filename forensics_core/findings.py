@@ -78,6 +78,12 @@ class DetectorSpec:
         ``"p_value"`` (its p-value, or ``min(1, nfa)``; the default) or
         ``"score"``, for a detector that states no test but a measured
         statistic (such a detector is advisory to the p-value triage rules).
+    supports_hd : bool
+        Whether the detector's findings can support Hd ("as the camera
+        produced it"); true by default. False for a detector that looks for
+        one kind of manipulation only, whose clean finding says nothing about
+        the others that Hp covers (a copy-move detector that finds no clone
+        says nothing about a splice): its calibrated LR is then never below 1.
     """
 
     name: str
@@ -88,6 +94,7 @@ class DetectorSpec:
     uses: tuple[str, ...] = ()
     formats: tuple[str, ...] = ()
     calibrated_on: str = "p_value"
+    supports_hd: bool = True
 
 
 @dataclass

@@ -50,7 +50,9 @@ def forensics_register_detectors() -> Sequence[DetectorSpec]:
     checked on; the core records ``skipped`` with the reason on any other,
     without calling the plugin) and ``calibrated_on="score"`` for a detector
     that states no test but a measured statistic, whose likelihood ratio is
-    then calibrated on its ``score``. Detector names must be unique across all
+    then calibrated on its ``score``, and ``supports_hd=False`` for a
+    detector that looks for one kind of manipulation only, so that its clean
+    finding is never read as support for an original. Detector names must be unique across all
     installed plugins; a clash is reported as a load error of the later plugin.
     """
 

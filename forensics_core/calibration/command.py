@@ -28,22 +28,25 @@ def calibrate_command(ctx, records, out_file, detectors):
     the ELUB bounds and the cross-validated Cllr and Cllr_min (folds grouped
     by scene). Needs NFI's lir (pip install lir).
     """
-    from .fit import calibrate, score_features
+    from .fit import calibrate, calibrator_inputs
 
     names = [d.strip() for d in detectors.split(",") if d.strip()] if detectors else None
     try:
-        result = calibrate(records, names, score_features(ctx.find_root().command.host))
+        result = calibrate(records, names, calibrator_inputs(ctx.find_root().command.host))
     except CalibrationError as exc:
         click.echo(f"forensics: {exc}", err=True)
         sys.exit(2)
     write_atomic(out_file, result.to_json().encode("utf-8"))
     table = Table(title=f"log10 LR calibrators: {result.data['n_hp']} Hp, {result.data['n_hd']} Hd photos, "
                         f"{result.data['cross_validation']}")
-    for col in ("", "ran Hp / Hd", "declined Hp / Hd", "log10 LR = a + b x", "ELUB bounds", "Cllr", "Cllr_min"):
+    for col in ("", "ran Hp / Hd", "declined Hp / Hd", "log10 LR = a + b x (4PL: module docstring)", "ELUB bounds",
+                "Cllr", "Cllr_min"):
         table.add_column(col)
     for c in result.calibrators.values():
         table.add_row(c.detector, f"{c.n_hp} / {c.n_hd}", f"{c.n_declined_hp} / {c.n_declined_hd}",
-                      f"{c.intercept:+.3f} {c.slope:+.3f} x", f"{c.lower:+.2f} .. {c.upper:+.2f}",
+                      f"{c.intercept:+.3f} {c.slope:+.3f} x" + (
+                          f"; 4PL floor {c.floor:.3f}, ceiling {c.ceiling:.3f}" if c.floor or c.ceiling else ""),
+                      f"{c.lower:+.2f} .. {c.upper:+.2f}",
                       f"{c.cllr:.3f}", f"{c.cllr_min:.3f}")
     f = result.fusion
     if f is not None:

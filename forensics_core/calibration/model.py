@@ -16,6 +16,17 @@ bounds of its calibration data (Vergeer et al. 2016): no LR claims more than
 the validation data can support. A detector that states no test but a
 measured ``score`` (e.g. copy_move's grain peak) is calibrated on
 that score instead (``x = score``; the calibrator's ``feature`` says which).
+Such a calibrator may be the four-parameter logistic of ``lir``
+(``FourParameterLogisticCalibrator``), whose balanced posterior is
+
+    P = c + (1 - c) / (1 + d) * sigmoid(ln 10 (a + b x)),   LR = P / (1 - P),
+
+when its calibration data need the floor ``c`` (manipulations of another
+kind score as originals do) or the ceiling ``d`` (scenes that mimic the
+trace, such as printed repetition for copy-move); with ``c = d = 0`` it is
+the logistic line. A one-sided calibrator (``lower = 0``) never supports Hd:
+its detector's clean finding says nothing about the manipulations it cannot
+see.
 A detector that declines (status other than ``ok``, or no value of its
 feature) gives LR = 1. The fused LR is a logistic-regression
 fusion of the detectors' log10 LRs, ``c + sum(w_d llr_d)``, clipped to its
@@ -91,6 +102,9 @@ class Calibrator:
     feature : str
         ``"p"``: ``x = -log10 p`` (:func:`feature`); ``"score"``: ``x`` is the
         finding's score, for detectors that state no p-value.
+    floor, ceiling : float
+        ``c`` and ``d`` of the four-parameter logistic (module docstring); 0
+        for the logistic line.
     """
 
     detector: str
@@ -105,6 +119,8 @@ class Calibrator:
     cllr: float | None = None
     cllr_min: float | None = None
     feature: str = "p"
+    floor: float = 0.0
+    ceiling: float = 0.0
 
     def x(self, p: float | None, score: float | None = None) -> float | None:
         """The calibrator's input from a finding's p-value and score; None when it has none."""
@@ -117,7 +133,25 @@ class Calibrator:
         x = self.x(p, score)
         if x is None:
             return 0.0
-        return _clip(self.intercept + self.slope * x, self.lower, self.upper)
+        return _clip(four_parameter_log10_lr(x, self.intercept, self.slope, self.floor, self.ceiling),
+                     self.lower, self.upper)
+
+
+def four_parameter_log10_lr(x: float, intercept: float, slope: float, floor: float, ceiling: float) -> float:
+    """log10 LR of the four-parameter logistic at ``x`` (module docstring); the line ``intercept + slope x`` when
+    ``floor`` and ``ceiling`` are 0."""
+    line = intercept + slope * x
+    if floor == 0.0 and ceiling == 0.0:
+        # Computed as the line itself: through P, a line far from 0 (x up to
+        # FEATURE_CAP) would round P to 0 or 1.
+        return line
+    rise = 1.0 / (1.0 + 10.0 ** -line) if line > -300 else 0.0
+    fall = 1.0 / (1.0 + 10.0 ** line) if line < 300 else 0.0
+    hp = floor + (1.0 - floor) * rise / (1.0 + ceiling)
+    hd = (1.0 - floor) * (ceiling + fall) / (1.0 + ceiling)
+    if hp <= 0.0 or hd <= 0.0:
+        return math.inf if hd <= 0.0 else -math.inf
+    return math.log10(hp / hd)
 
 
 @dataclass(frozen=True)

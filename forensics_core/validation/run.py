@@ -18,7 +18,7 @@ from ..synthetic import SyntheticCase
 from .cases import Suite, SuiteError, content_hash, write_synthetic
 from .dependence import authentic_dependence
 from .null_check import null_checks
-from ..calibration.fit import performance, score_features, supports_hp
+from ..calibration.fit import calibrator_inputs, performance, supports_hp
 from .record import FORMAT, Dataset, ValidationRecord, case_rows, compute_methods
 from .runner import CaseResult, run_cases
 
@@ -78,7 +78,7 @@ def validate(
     results = run_cases(suite.cases, host, options, out / "findings", workers, on_done)
     versions = {n: d.spec.version for n, d in host.detectors.items()}
     rows = case_rows(results)
-    features = score_features(host)
+    features = calibrator_inputs(host)
     fusion = {"policy": options.fusion, "alpha": ALPHA}
     record = ValidationRecord(
         format=FORMAT,

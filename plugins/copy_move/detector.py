@@ -41,14 +41,26 @@ def _full_matrix(h: Hypothesis, scale: float) -> list[list[float]]:
 
 def _aligned(gray: np.ndarray, grain: np.ndarray, h: Hypothesis,
              params: Mapping[str, Any]) -> tuple[Hypothesis, Identity | None, str]:
-    """The hypothesis at the alignment (keypoints' or refined on intensities) where the grain peak is highest."""
+    """The hypothesis, either way round, at the alignment (keypoints' or refined on intensities) where the grain
+    peak is highest.
+
+    Which region is the copy is unknown, and the comparison is not symmetric:
+    the source is resampled onto the target, so only warping the source onto
+    its copy repeats the resampling the copy went through. On the shared
+    MICC-F220 copy-moves the better of the two directions raised the grain
+    peak of rotated and scaled copies (median 0.41 to 0.44; above 0.3 on 101
+    of 110 copies instead of 84).
+    """
     window, offset = int(params["window_px"]), float(params["min_distance_px"])
-    best, found, how = h, identity(gray, grain, h, window, offset), "keypoints"
-    refined = refine(gray, h, target_region(h, gray.shape, 0), float(params["refine_max_shift_px"]))
-    if refined is not None:
-        again = identity(gray, grain, refined, window, offset)
-        if again is not None and (found is None or again.peak > found.peak):
-            best, found, how = refined, again, "intensities (ECC)"
+    best, found, how = h, None, "keypoints"
+    for way in (h, h.reversed()):
+        refined = refine(gray, way, target_region(way, gray.shape, 0), float(params["refine_max_shift_px"]))
+        for candidate, aligned in ((way, "keypoints"), (refined, "intensities (ECC)")):
+            if candidate is None:
+                continue
+            again = identity(gray, grain, candidate, window, offset)
+            if again is not None and (found is None or again.peak > found.peak):
+                best, found, how = candidate, again, aligned
     return best, found, how
 
 

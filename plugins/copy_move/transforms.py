@@ -77,6 +77,10 @@ class Hypothesis:
     def rotation_deg(self) -> float:
         return float(np.degrees(np.arctan2(self.matrix[1, 0], self.matrix[0, 0])))
 
+    def reversed(self) -> Hypothesis:
+        """The same pairs read the other way round: ``source = inverse(matrix) @ (target, 1)``."""
+        return Hypothesis(cv2.invertAffineTransform(self.matrix), self.target, self.source, self.log10_nfa)
+
 
 def log10_nfa(n: int, k: int, threshold_px: float, area_px: float) -> float:
     """``log10`` of AC-RANSAC's number of false alarms for ``k`` of ``n`` pairs within ``threshold_px`` (module docstring)."""

@@ -10,7 +10,7 @@ import pytest
 from click.testing import CliRunner
 
 from forensics_core.calibration import CalibrationError, Calibrator, Fusion, feature, load, verbal
-from forensics_core.calibration.fit import calibrate, costs, scene
+from forensics_core.calibration.fit import CalibratorInput, calibrate, costs, scene
 from forensics_core.calibration.model import CalibrationSet
 from forensics_core.cli import cli
 
@@ -210,7 +210,7 @@ def test_a_detector_that_states_no_p_value_is_calibrated_on_its_score(tmp_path):
     case["detectors"]["measured"] = {"status": "inconclusive", "p_value": None, "score": None}
     path.write_text(json.dumps(record))
     assert calibrate([path]).calibrators["measured"].n_declined_hd == 20  # on p-values it never ran
-    cs = calibrate([path], features={"measured": "score"})
+    cs = calibrate([path], features={"measured": CalibratorInput("score")})
     measured = cs.calibrators["measured"]
     assert measured.feature == "score" and cs.calibrators["strong"].feature == "p"
     assert measured.slope > 0 and measured.cllr < cs.calibrators["noise"].cllr and measured.cllr_min < 0.1
@@ -246,10 +246,69 @@ def test_a_score_detector_is_judged_at_its_calibrated_lr_not_at_score_above_0():
     rows = [{"name": r.name, "spliced": r.spliced, "error": None, "conditions": r.conditions,
              "detectors": {"measured": {"status": "ok", "p_value": None, "score": r.detectors["measured"].score}}}
             for r in results]
-    flags = supports_hp(rows, {"measured": "score"})
+    flags = supports_hp(rows, {"measured": CalibratorInput("score")})
     (plain,) = [m for m in compute_methods(results, {"measured": "1"}, 0.01) if m.name == "measured"]
     (by_lr,) = [m for m in compute_methods(results, {"measured": "1"}, 0.01, flags) if m.name == "measured"]
     plain, by_lr = plain.operating_point, by_lr.operating_point
     assert plain.rule == "score above 0" and by_lr.rule.startswith("calibrated LR of 2 or more")
     # Measured: every authentic photo has a score above 0; none has an LR of 2 or more, 85 of 100 manipulated do.
     assert plain.fpr.k >= 95 and by_lr.fpr.k <= 3 and by_lr.tpr.k >= 75
+
+
+def test_the_four_parameter_logistic_is_the_line_without_floor_and_ceiling_and_bounded_with_them():
+    from forensics_core.calibration.model import four_parameter_log10_lr
+
+    assert four_parameter_log10_lr(0.7, -0.5, 2.0, 0.0, 0.0) == pytest.approx(0.9)
+    c, d = 0.05, 0.04
+    floor, ceiling = math.log10(c / (1 - c)), math.log10((c + (1 - c) / (1 + d)) / ((1 - c) * d / (1 + d)))
+    xs = np.linspace(-20.0, 20.0, 81)
+    llrs = [four_parameter_log10_lr(x, -1.0, 3.0, c, d) for x in xs]
+    assert np.all(np.diff(llrs) >= 0) and llrs[40] - llrs[39] > 0.1
+    assert llrs[0] == pytest.approx(floor, abs=1e-6) and llrs[-1] == pytest.approx(ceiling, abs=1e-6)
+
+
+def _mixed_score_record(tmp_path, n=400, seed=5):
+    """Scores of a detector of one kind of manipulation: a quarter of Hp are manipulations it cannot see (scored as
+    originals), and 4 % of Hd are scenes that mimic its trace (scored as manipulations)."""
+    path = _record(tmp_path, n=n, seed=seed)
+    record = json.loads(path.read_text())
+    rng = np.random.default_rng(seed)
+    for case in record["cases"]:
+        mimic = rng.uniform() < (0.75 if case["spliced"] else 0.04)
+        score = float(rng.uniform(0.3, 0.9) if mimic else rng.uniform(0.0, 0.2))
+        case["detectors"]["measured"] = {"status": "ok", "p_value": None, "score": score}
+    path.write_text(json.dumps(record))
+    return path
+
+
+def test_a_score_with_a_floor_and_a_ceiling_gets_the_four_parameter_logistic(tmp_path):
+    """A line through such scores would keep rising past the scenes that mimic the trace; the four parameters stop
+    the LR where the data do, and the better fit shows in the cross-validated Cllr."""
+    path = _mixed_score_record(tmp_path)
+    from forensics_core.calibration.fit import _logit_line, cases_from_rows, cross_validated
+
+    measured = calibrate([path], features={"measured": CalibratorInput("score")}).calibrators["measured"]
+    assert 0.1 < measured.floor < 0.4 and 0.0 < measured.ceiling < 0.25
+    # Each cluster's LR is that of the mixture, 0.75 / 0.04 above and 0.25 / 0.96 below (up to the sample's 8
+    # mimicking originals), where a line would rise and fall without end.
+    assert 0.7 < measured.log10_lr(None, 0.9) < math.log10(0.75 / 0.04) + 0.3
+    assert math.log10(0.25 / 0.96) - 0.3 < measured.log10_lr(None, 0.0) < math.log10(0.25 / 0.96) + 0.3
+    rows = json.loads(path.read_text())["cases"]
+    y = np.array([c["spliced"] for c in rows])
+    four, _ = cross_validated(["measured"], cases_from_rows(rows), {"measured": CalibratorInput("score")})
+    assert costs(four["measured"], y)[0] < 0.75
+
+    clean = calibrate([path], features={"noise": CalibratorInput("score")}).calibrators["noise"]
+    assert clean.floor == clean.ceiling == 0.0  # no score: not fitted; and a p-value calibrator stays a line
+    assert calibrate([path]).calibrators["strong"].floor == 0.0
+    assert _logit_line(np.array([0.0, 1.0]), np.array([0, 1]))[1] > 0
+
+
+def test_a_one_sided_calibrator_never_supports_hd(tmp_path):
+    """A detector of one kind of manipulation that finds none says nothing about the others Hp covers."""
+    path = _mixed_score_record(tmp_path)
+    two = calibrate([path], features={"measured": CalibratorInput("score")}).calibrators["measured"]
+    one = calibrate([path], features={"measured": CalibratorInput("score", one_sided=True)}).calibrators["measured"]
+    assert two.lower < -0.3 and two.log10_lr(None, 0.05) < -0.3
+    assert one.lower == 0.0 and one.log10_lr(None, 0.05) == 0.0
+    assert one.log10_lr(None, 0.8) == pytest.approx(two.log10_lr(None, 0.8))
