@@ -312,3 +312,16 @@ def test_a_one_sided_calibrator_never_supports_hd(tmp_path):
     assert two.lower < -0.3 and two.log10_lr(None, 0.05) < -0.3
     assert one.lower == 0.0 and one.log10_lr(None, 0.05) == 0.0
     assert one.log10_lr(None, 0.8) == pytest.approx(two.log10_lr(None, 0.8))
+
+
+def test_a_detector_of_one_kind_of_manipulation_is_calibrated_one_sided():
+    """copy_move declares supports_hd=False: the shipped calibrator never reads its findings as support for Hd."""
+    from forensics_core.calibration import load_shipped
+    from forensics_core.calibration.fit import calibrator_inputs
+    from forensics_core.plugins import PluginHost
+
+    inputs = calibrator_inputs(PluginHost.from_entry_points())
+    assert inputs["copy_move"] == CalibratorInput("score", one_sided=True)
+    assert inputs["dq"] == CalibratorInput("score") and "jpeg_grid" not in inputs
+    shipped = load_shipped().calibrators["copy_move"]
+    assert shipped.lower == 0.0 and shipped.log10_lr(None, 0.0) == 0.0 and shipped.floor > 0.0
