@@ -25,7 +25,9 @@ calibrator needs, so calibrating never re-analyses a photo.
   (``DetectorSpec.supports_hd``) gets a one-sided calibrator: its lower
   bound is held at 0 (LR 1).
 * Fusion: logistic regression (balanced) on the detectors' bounded log10
-  LRs, a declining detector entering as 0 (LR 1); ELUB bounds again.
+  LRs, a declining detector entering as 0 (LR 1); the intercept may temper
+  their evidence but not create any (:meth:`.model.Fusion.log10_lr`); ELUB
+  bounds again.
 * Performance: Cllr and Cllr_min (lir.metrics) over every calibration photo,
   declines included as LR 1, each photo's LR computed by calibrators fitted
   without its scene (``GroupKFold`` over :func:`scene`): copy-move variants of
@@ -244,11 +246,12 @@ def fit_fusion(detectors: Sequence[str], calibrators: dict[str, Calibrator], cas
     if len(set(y.tolist())) < 2:
         return Fusion(intercept=0.0, weights={d: 0.0 for d in detectors}, lower=0.0, upper=0.0)
     model = LogisticRegression(class_weight="balanced").fit(X, y)
-    intercept = float(model.intercept_[0]) / _LN10
-    weights = {d: float(w) / _LN10 for d, w in zip(detectors, model.coef_[0])}
-    fused = intercept + X @ np.array([weights[d] for d in detectors])
+    unbounded = Fusion(intercept=float(model.intercept_[0]) / _LN10,
+                       weights={d: float(w) / _LN10 for d, w in zip(detectors, model.coef_[0])},
+                       lower=-math.inf, upper=math.inf)
+    fused = np.array([unbounded.log10_lr(dict(zip(detectors, row))) for row in X])
     lower, upper = _elub(fused, y)
-    return Fusion(intercept=intercept, weights=weights, lower=lower, upper=upper)
+    return replace(unbounded, lower=lower, upper=upper)
 
 
 def _fit_all(detectors: Sequence[str], cases: Sequence[Case],

@@ -29,9 +29,11 @@ its detector's clean finding says nothing about the manipulations it cannot
 see.
 A detector that declines (status other than ``ok``, or no value of its
 feature) gives LR = 1. The fused LR is a logistic-regression
-fusion of the detectors' log10 LRs, ``c + sum(w_d llr_d)``, clipped to its
-own ELUB bounds; it learns how far the detectors repeat one another instead
-of assuming they are independent.
+fusion of the detectors' log10 LRs, ``c + sum(w_d llr_d)``, kept between the
+sums of its negative and of its positive terms (the intercept ``c`` tempers
+the detectors' evidence but creates none; :meth:`Fusion.log10_lr`) and
+clipped to its own ELUB bounds; it learns how far the detectors repeat one
+another instead of assuming they are independent.
 
 References
 ----------
@@ -177,9 +179,20 @@ class Fusion:
     cllr_min: float | None = None
 
     def log10_lr(self, detector_llrs: Mapping[str, float]) -> float:
-        """The fused log10 LR; a detector absent from ``detector_llrs`` counts as LR 1."""
-        total = self.intercept + sum(w * detector_llrs.get(name, 0.0) for name, w in self.weights.items())
-        return _clip(total, self.lower, self.upper)
+        """The fused log10 LR; a detector absent from ``detector_llrs`` counts as LR 1.
+
+        The intercept may temper the detectors' evidence but not create any:
+        the sum stays between the weighted terms for Hd added up and those for
+        Hp added up, so that with every detector at LR 1 the fused LR is 1.
+        The intercept reflects the make-up of the calibration data (there,
+        photos on which no detector found anything were mostly originals),
+        not the photo; left free, it read "weak support for Hd" on every
+        photo in which no detector found anything, which is calling a photo
+        an original for lack of findings.
+        """
+        terms = [w * detector_llrs.get(name, 0.0) for name, w in self.weights.items()]
+        least, most = min(0.0, sum(t for t in terms if t < 0.0)), max(0.0, sum(t for t in terms if t > 0.0))
+        return _clip(_clip(self.intercept + sum(terms), least, most), self.lower, self.upper)
 
 
 @dataclass(frozen=True)

@@ -46,14 +46,26 @@ def test_a_calibrator_bounds_caps_and_gives_lr_1_when_the_detector_declines():
 
 
 def test_fusion_counts_an_absent_or_uncalibrated_detector_as_lr_1():
-    fusion = Fusion(intercept=0.1, weights={"a": 0.5, "b": 1.0}, lower=-1.0, upper=1.5)
-    assert fusion.log10_lr({"a": 1.0}) == pytest.approx(0.6)
+    fusion = Fusion(intercept=-0.1, weights={"a": 0.5, "b": 1.0}, lower=-1.0, upper=1.5)
+    assert fusion.log10_lr({"a": 1.0}) == pytest.approx(0.4)
     assert fusion.log10_lr({"a": 4.0, "b": 4.0}) == 1.5
     cs = CalibrationSet(data={}, tool={}, fusion=fusion,
                         calibrators={"a": Calibrator("a", 0.0, 1.0, -2.0, 2.0, 5, 5)})
     llrs = cs.detector_llrs({"a": 0.1, "plugin_x": 1e-9, "b": None})
     assert llrs["plugin_x"] is None and llrs["a"] == pytest.approx(1.0)
-    assert cs.fused(llrs) == pytest.approx(0.1 + 0.5)
+    assert cs.fused(llrs) == pytest.approx(-0.1 + 0.5)
+
+
+def test_the_fusion_intercept_tempers_the_detectors_evidence_but_creates_none():
+    """With no detector away from LR 1 the fused LR is 1, whatever the calibration data's make-up."""
+    for intercept in (-0.6, 0.3):
+        fusion = Fusion(intercept=intercept, weights={"a": 1.0, "b": 1.0}, lower=-2.0, upper=2.0)
+        assert fusion.log10_lr({}) == 0.0 and fusion.log10_lr({"a": 0.0, "b": 0.0}) == 0.0
+    fusion = Fusion(intercept=0.3, weights={"a": 1.0, "b": 1.0}, lower=-2.0, upper=2.0)
+    assert fusion.log10_lr({"a": 0.1}) == pytest.approx(0.1)  # not 0.4: no more than the detectors found
+    assert fusion.log10_lr({"a": -0.5}) == pytest.approx(-0.2)  # tempered
+    assert fusion.log10_lr({"a": -0.5, "b": 0.2}) == pytest.approx(0.0)
+    assert Fusion(intercept=-0.6, weights={"a": 1.0}, lower=-2.0, upper=2.0).log10_lr({"a": 0.4}) == 0.0
 
 
 def test_cllr_against_values_computed_by_hand():
