@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import os
 import sys
 from dataclasses import dataclass
@@ -41,6 +42,7 @@ from .validation.command import validate_command
 
 if TYPE_CHECKING:
     from .analysis import Options
+    from .findings import Verdict
     from .pipeline import ReportSettings
     from .signing import ExaminerKey
 
@@ -52,6 +54,22 @@ FORMATS = ("json", "html", "pdf")
 REPORT_FORMATS = ("html", "pdf")
 
 err_console = Console(stderr=True, highlight=False, emoji=False)
+
+
+def _strength_words(verdict: Verdict) -> str:
+    """The fused likelihood ratio after the verdict's label on a photo's line, with its words when it supports a side.
+
+    The label answers the triage rule; a copy found by a detector that states
+    no p-value can leave it "consistent" while the likelihood ratio supports
+    manipulation, so the line states both.
+    """
+    from .calibration.model import WEAK_SUPPORT_LR
+
+    lr = verdict.likelihood_ratio
+    if lr is None or lr.log10_lr is None:
+        return ""
+    words = f", {lr.verbal}" if abs(lr.log10_lr) >= math.log10(WEAK_SUPPORT_LR) else ""
+    return f"; fused LR {10.0 ** lr.log10_lr:.3g}{words}"
 
 
 def _fail_line(subject: str, reason: str) -> None:
@@ -336,8 +354,8 @@ def analyze(ctx, photos, out_dir, force, jobs, **run):
                     failures += 1
                     _fail_line(str(photo), done.findings.evidence.changed_during_analysis)
                 kept = " (kept: already analysed with these settings; --force replaces it)" if done.kept else ""
-                click.echo(f"{visible(str(photo))}: {done.findings.verdict.label.value}{kept} -> "
-                           f"{visible(str(done.findings_path))}")
+                click.echo(f"{visible(str(photo))}: {done.findings.verdict.label.value}"
+                           f"{_strength_words(done.findings.verdict)}{kept} -> {visible(str(done.findings_path))}")
             progress.advance(task)
             progress.refresh()
     if failures:

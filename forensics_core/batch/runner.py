@@ -186,6 +186,7 @@ class _Batch:
         for url in outcome.refused_urls:
             self.fail_line(job.folder, f"the PDF renderer was refused {url[:100]!r} (only data: URLs are allowed)")
         row.outcome, row.output, row.verdict = "analysed", job.folder, outcome.verdict
+        row.log10_lr = outcome.log10_lr
         row.detectors = {name: {"status": status, "score": score} for name, status, score in outcome.detectors}
         return 1 + self.settle_duplicates(job.sha256)
 

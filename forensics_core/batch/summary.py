@@ -8,6 +8,12 @@ Rows keep the input order. ``outcome`` is one of:
 ``failed``     ``error`` says why (one line);
 ``pending``    the run was interrupted before it was done.
 
+``verdict`` is the fusion policy's label and ``log10_lr`` the fused log10
+likelihood ratio of Hp (manipulation) against Hd (empty when no calibrator
+applies): the label answers the triage, the likelihood ratio says how
+strongly the findings support either proposition, and the two can differ
+(e.g. a copy found by a detector that states no p-value).
+
 ``time_s`` is the wall-clock time the worker took (for resumed photos, as
 recorded by the earlier run's summary when there is one). In the CSV, text
 cells that a spreadsheet would take for a formula (starting with ``=``,
@@ -34,17 +40,21 @@ from .plan import SUMMARY_CSV, SUMMARY_JSON
 OUTCOMES = ("analysed", "resumed", "duplicate", "failed", "pending")
 SUMMARY_VERSION = "1"
 _FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
-_FIELDS = ("photo", "sha256", "outcome", "verdict", "output", "duplicate_of", "time_s", "attempts", "error")
+_FIELDS = ("photo", "sha256", "outcome", "verdict", "log10_lr", "output", "duplicate_of", "time_s", "attempts", "error")
 
 
 @dataclass
 class Row:
-    """One input photo's line of the summary; ``detectors`` maps each name to its status and score."""
+    """One input photo's line of the summary; ``detectors`` maps each name to its status and score.
+
+    ``log10_lr`` is the verdict's fused log10 likelihood ratio, as in ``findings.json``.
+    """
 
     photo: str
     sha256: str | None
     outcome: str = "pending"
     verdict: str | None = None
+    log10_lr: float | None = None
     output: str | None = None
     duplicate_of: str | None = None
     time_s: float | None = None
@@ -54,10 +64,12 @@ class Row:
 
 
 def fill_from_findings(row: Row, folder: Path) -> bool:
-    """Copy the verdict and each detector's status and score from ``folder/findings.json``; False if unreadable."""
+    """Copy the verdict, its fused log10 LR and each detector's status and score from ``folder/findings.json``; False
+    if unreadable."""
     try:
         doc = json.loads((folder / FINDINGS_NAME).read_bytes())
         row.verdict = doc["verdict"]["label"]
+        row.log10_lr = doc["verdict"].get("log10_lr")
         row.detectors = {d["name"]: {"status": d["status"], "score": d["score"]} for d in doc["detectors"]}
     except (OSError, ValueError, KeyError, TypeError):
         return False

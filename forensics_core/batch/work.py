@@ -71,6 +71,8 @@ class PhotoOutcome:
         One-line reason the photo failed, else None.
     verdict : str or None
         The verdict label.
+    log10_lr : float or None
+        The fused log10 likelihood ratio (None when no calibrator applies).
     detectors : tuple of (name, status, score)
     seconds : float
         Wall-clock time on the worker.
@@ -83,6 +85,7 @@ class PhotoOutcome:
 
     error: str | None
     verdict: str | None = None
+    log10_lr: float | None = None
     detectors: tuple[tuple[str, str, float | None], ...] = ()
     seconds: float = 0.0
     refused_urls: tuple[str, ...] = ()
@@ -177,6 +180,7 @@ def process_photo(job: Job, settings: Settings) -> PhotoOutcome:
     return PhotoOutcome(
         error=findings.evidence.changed_during_analysis,
         verdict=findings.verdict.label.value,
+        log10_lr=findings.verdict.log10_lr,
         detectors=tuple((d.name, d.status.value, d.score) for d in findings.detectors),
         seconds=seconds,
         refused_urls=tuple(done.refused_urls),

@@ -259,9 +259,11 @@ def _summary(findings: Findings) -> dict[str, Any]:
             "inconclusive": "The findings do not favour either proposition strongly enough to pass the stated thresholds; "
                             "nothing is said for or against an original.",
         }[verdict.label.value]
+    lr_summary = _lr_summary(verdict, findings.detectors)
     return {
         "label": verdict.label.value,
         "outcome": wording.OUTCOME_WORDS[verdict.label],
+        "tension": _tension(verdict, lr_summary, rows),
         "strength": strength,
         "explanation": verdict.explanation,
         "reading": reading,
@@ -271,8 +273,39 @@ def _summary(findings: Findings) -> dict[str, Any]:
         "drivers": verdict.drivers,
         "rows": rows,
         "scale": wording.scale() if strength.graded else (),
-        "lr": _lr_summary(verdict, findings.detectors),
+        "lr": lr_summary,
     }
+
+
+def _tension(verdict, lr_summary: dict[str, Any] | None, rows: Sequence[dict[str, Any]]) -> str | None:
+    """What page 1 says when the triage's outcome and the likelihood ratio point different ways, else None.
+
+    The triage rule tests each detector's trace against a level fixed in
+    advance and leaves out detectors that state no p-value; the likelihood
+    ratio weighs every calibrated detector. A green "consistent with an
+    original" above support for Hp (or a red "inconsistent" above support for
+    Hd) would otherwise read as one answer when there are two.
+    """
+    lr = verdict.likelihood_ratio
+    if verdict.policy == LR_POLICY or lr is None or lr.log10_lr is None or lr_summary is None:
+        return None
+    weak = math.log10(WEAK_SUPPORT_LR)
+    carriers = lr_summary["contributed"]
+    if verdict.label.value == "consistent" and lr.log10_lr >= weak:
+        untested = ", ".join(r["name"] for r in rows if r["role"] == "advisory")
+        left_out = f" ({untested} state none and are left out of it)" if untested else ""
+        return (f"The outcome and the strength point different ways. No detector's test rejected an original at the "
+                f"stated level, yet the calibrated likelihood ratio gives {lr.verbal}. The triage counts only "
+                f"detectors that state a p-value{left_out}; the likelihood ratio weighs every calibrated detector. "
+                f"The outcome is therefore no sign that the photo is an original: read the sections of the detectors "
+                f"that carry the likelihood ratio ({carriers}).")
+    if verdict.label.value == "inconsistent" and lr.log10_lr <= -weak:
+        return (f"The outcome and the strength point different ways. A detector's test rejected an original at the "
+                f"stated level, yet the calibrated likelihood ratio gives {lr.verbal}. A rejection says how "
+                f"unusual the trace is among originals, not how much more probable it is after manipulation; on the "
+                f"calibration data, findings like these were more probable in originals. Read the section of the "
+                f"detector that drove the outcome before relying on it.")
+    return None
 
 
 def _lr_summary(verdict, detectors) -> dict[str, Any] | None:

@@ -51,7 +51,9 @@ def test_a_folder_of_good_corrupt_and_duplicate_files(tmp_path):
     assert dup["outcome"] == "duplicate" and dup["duplicate_of"] == str(photos / "copy of left01.jpg")
     assert os.readlink(out / "left01") == "copy of left01"
     assert dup["sha256"] == primary["sha256"] == sha256(CALIBRATION / "left01.jpg")
-    assert json.loads((out / "left01" / "findings.json").read_text())["evidence"]["name"] == "copy of left01.jpg"
+    kept = json.loads((out / "left01" / "findings.json").read_text())
+    assert kept["evidence"]["name"] == "copy of left01.jpg"
+    assert primary["log10_lr"] == dup["log10_lr"] == kept["verdict"]["log10_lr"]
     assert rows["left02.jpg"]["outcome"] == "analysed" and rows["left02.jpg"]["attempts"] == 1
     assert doc["counts"]["analysed"] == 2 and doc["counts"]["duplicate"] == 1 and doc["counts"]["failed"] == 3
     assert "2 local worker processes" in doc["run"]["workers"]

@@ -9,8 +9,8 @@ from forensics_core.batch.summary import Row, counts, detector_names, to_csv, wr
 
 def test_csv_has_a_column_pair_per_detector_and_defuses_formulas():
     rows = [
-        Row("=HYPERLINK(\"http://x\").jpg", "ab" * 32, "analysed", "consistent", "out/x", time_s=1.5, attempts=1,
-            detectors={"steady": {"status": "ok", "score": 0.25}}),
+        Row("=HYPERLINK(\"http://x\").jpg", "ab" * 32, "analysed", "consistent", 1.48, "out/x", time_s=1.5,
+            attempts=1, detectors={"steady": {"status": "ok", "score": 0.25}}),
         Row("b.jpg", None, "failed", error="-not an image"),
     ]
     names = detector_names(rows, ["steady", "cfa"])
@@ -19,6 +19,7 @@ def test_csv_has_a_column_pair_per_detector_and_defuses_formulas():
     assert table[0]["photo"].startswith("'=") and table[1]["error"] == "'-not an image"
     assert table[0]["steady.status"] == "ok" and float(table[0]["steady.score"]) == 0.25
     assert table[0]["cfa.status"] == "" and table[1]["time_s"] == ""
+    assert float(table[0]["log10_lr"]) == 1.48 and table[1]["log10_lr"] == ""
 
 
 def test_summary_json_counts_outcomes_and_verdicts(tmp_path):

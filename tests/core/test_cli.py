@@ -33,6 +33,8 @@ def test_analyze_writes_findings_and_leaves_the_evidence_untouched(photo, tmp_pa
     assert out.returncode == 0, out.stderr
     findings = json.loads((tmp_path / "out" / "left01" / "findings.json").read_text())
     validate(findings)
+    lr = findings["verdict"]["likelihood_ratio"]
+    assert f": {findings['verdict']['label']}; fused LR {10.0 ** lr['log10_lr']:.3g}" in out.stdout
     assert findings["evidence"]["sha256"] == before
     assert findings["parameters"]["case_id"] == "C-1"
     assert hashlib.sha256(photo.read_bytes()).hexdigest() == before
@@ -175,3 +177,16 @@ def test_photos_between_pillows_bomb_warning_and_our_limit_give_one_line_and_no_
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 2 and all(line.startswith("forensics: error: ") for line in lines), out.stderr
     assert "Warning" not in out.stderr
+
+
+def test_a_photos_line_names_the_side_the_likelihood_ratio_supports():
+    from forensics_core.calibration.model import verbal
+    from forensics_core.cli import _strength_words
+    from forensics_core.findings import LikelihoodRatio, Verdict, VerdictLabel
+
+    verdict = Verdict(VerdictLabel.CONSISTENT, 1.0, "e", "bonferroni")
+    assert _strength_words(verdict) == ""
+    for log10_lr, words in ((1.48, "; fused LR 30.2, moderate support for Hp (manipulation)"),
+                            (-0.19, "; fused LR 0.646")):
+        verdict.likelihood_ratio = LikelihoodRatio("h", "d", log10_lr, verbal(log10_lr))
+        assert _strength_words(verdict) == words

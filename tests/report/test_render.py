@@ -288,3 +288,30 @@ def test_page_one_names_apart_the_detectors_whose_likelihood_ratio_is_within_the
     summary = _lr_summary(verdict, findings)
     assert summary["contributed"] == "against, strong" and summary["slight"] == "faint"
     assert summary["band"] == "between 1/2 and 2"
+
+
+@pytest.mark.parametrize("label, log10_lr, said", [
+    ("consistent", 1.48, "no sign that the photo is an original"),
+    ("inconsistent", -0.5, "more probable in originals"),
+    ("consistent", 0.2, None),
+    ("consistent", -1.0, None),
+    ("inconsistent", 1.0, None),
+])
+def test_page_one_says_when_the_triage_outcome_and_the_likelihood_ratio_point_different_ways(label, log10_lr, said):
+    from forensics_core.calibration.model import verbal
+    from forensics_core.findings import LikelihoodRatio, Verdict, VerdictLabel
+    from forensics_core.report.render import _tension
+
+    verdict = Verdict(VerdictLabel(label), 0.5, "e", "bonferroni")
+    verdict.likelihood_ratio = LikelihoodRatio(hp="h", hd="d", log10_lr=log10_lr, verbal=verbal(log10_lr),
+                                               contributed=["copy_move"])
+    rows = [{"name": "copy_move", "role": "advisory"}, {"name": "jpeg_grid", "role": "drove"}]
+    text = _tension(verdict, {"contributed": "copy_move"}, rows)
+    if said is None:
+        assert text is None
+    else:
+        assert said in text and verbal(log10_lr) in text
+        if label == "consistent":
+            assert "(copy_move state none and are left out of it)" in text
+    verdict.policy = "likelihood_ratio"
+    assert _tension(verdict, {"contributed": "copy_move"}, rows) is None
