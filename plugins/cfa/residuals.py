@@ -25,7 +25,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba as nb
 import numpy as np
 
 FEATURES = (
@@ -73,72 +72,90 @@ class BlockFeatures:
     block_px: int
 
 
+# Rows of pixels computed at once: bounds the working memory (a few arrays of
+# this many rows, three channels, float32) whatever the photo's size.
+_STRIP_PX = 64
+
+
 def _mirrored(index: np.ndarray, size: int) -> np.ndarray:
     """Indices one step outside ``[0, size)`` reflected without repeating the edge (keeps the cell phase)."""
     index = np.abs(index)
     return np.where(index >= size, 2 * size - 2 - index, index)
 
 
-@nb.njit(cache=True, nogil=True)
-def _clipped(value, top):
-    return value <= 0.0 or value >= top
+def _cell_sums(a: np.ndarray, block: int, out: np.ndarray) -> None:
+    """Sums of ``a`` over each block's pixels at each position of the 2 x 2 cell.
 
-
-@nb.njit(cache=True, nogil=True)
-def _accumulate(rgb, block, ny, nx, scale, up, down, left, right, sums, counts, colour):
-    """One pass over the pixels of the whole blocks: sums of |residual| per block, feature and position.
-
-    ``up``/``down``/``left``/``right`` hold each row's or column's mirrored
-    neighbour index. A pixel is left out when any channel of it or of its
-    eight neighbours is at 0 or full scale: clipping flattens the residuals
-    of the samples and of the interpolated values unequally, which would bend
-    the pattern. Filled in place, in 8-bit units (values times ``scale``):
-    ``sums`` (ny, nx, 10, 4) and ``counts`` (ny, nx, 4) of the pixels kept,
-    and ``colour`` (ny, nx, 3) sums of R, B and G over all pixels.
+    ``a`` has shape (rows, cols), both multiples of ``block``; ``out``, shape
+    (rows // block, cols // block, 4) with the positions in
+    :data:`POSITIONS` order, is filled in place. The pixels of one position
+    in a block are every other one, so each sum adds strided slices of ``a``
+    (faster than reducing a reshaped array over its short axes).
     """
-    cross = np.empty(3, np.float32)
-    diag = np.empty(3, np.float32)
-    top = np.float32(254.5)
-    quarter = np.float32(0.25)
-    for y in range(ny * block):
-        by = y // block
-        pos_y = 2 * (y % 2)
-        ya, yb = up[y], down[y]
-        for x in range(nx * block):
-            xa, xb = left[x], right[x]
-            bx = x // block
-            colour[by, bx, 0] += np.float32(rgb[y, x, 0]) * scale
-            colour[by, bx, 1] += np.float32(rgb[y, x, 2]) * scale
-            colour[by, bx, 2] += np.float32(rgb[y, x, 1]) * scale
-            sat = False
-            for c in range(3):
-                v = np.float32(rgb[y, x, c]) * scale
-                n, s_, w, e = (np.float32(rgb[ya, x, c]) * scale, np.float32(rgb[yb, x, c]) * scale,
-                               np.float32(rgb[y, xa, c]) * scale, np.float32(rgb[y, xb, c]) * scale)
-                nw, ne, sw, se = (np.float32(rgb[ya, xa, c]) * scale, np.float32(rgb[ya, xb, c]) * scale,
-                                  np.float32(rgb[yb, xa, c]) * scale, np.float32(rgb[yb, xb, c]) * scale)
-                if (_clipped(v, top) or _clipped(n, top) or _clipped(s_, top) or _clipped(w, top)
-                        or _clipped(e, top) or _clipped(nw, top) or _clipped(ne, top) or _clipped(sw, top)
-                        or _clipped(se, top)):
-                    sat = True
-                    break
-                cross[c] = v - quarter * (n + s_ + w + e)
-                diag[c] = v - quarter * (nw + ne + sw + se)
-            if sat:
-                continue
-            pos = pos_y + (x % 2)
-            counts[by, bx, pos] += 1.0
-            s = sums[by, bx]
-            s[0, pos] += abs(cross[0])
-            s[1, pos] += abs(cross[1])
-            s[2, pos] += abs(cross[2])
-            s[3, pos] += abs(cross[0] - cross[1])
-            s[4, pos] += abs(cross[2] - cross[1])
-            s[5, pos] += abs(diag[0])
-            s[6, pos] += abs(diag[1])
-            s[7, pos] += abs(diag[2])
-            s[8, pos] += abs(diag[0] - diag[1])
-            s[9, pos] += abs(diag[2] - diag[1])
+    for px in range(2):
+        column = a[:, px::block].copy()
+        for k in range(px + 2, block, 2):
+            column += a[:, k::block]
+        for py in range(2):
+            cell = out[:, :, 2 * py + px]
+            np.copyto(cell, column[py::block])
+            for k in range(py + 2, block, 2):
+                cell += column[k::block]
+
+
+def _accumulate(rgb: np.ndarray, block: int, ny: int, nx: int,
+                scale: np.float32) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Sums of |residual| per block, feature and position over the whole blocks, in strips of rows.
+
+    A pixel is left out when any channel of it or of its eight neighbours is
+    at 0 or full scale: clipping flattens the residuals of the samples and of
+    the interpolated values unequally, which would bend the pattern. Returns,
+    in 8-bit units (values times ``scale``), float32: ``sums`` (ny, nx, 10, 4)
+    and ``counts`` (ny, nx, 4) of the pixels kept, and ``colour`` (ny, nx, 3)
+    sums of R, B and G over all pixels. The values must be finite (the
+    detector refuses other photos). For 8-bit photos the values are
+    multiples of 1/4, and their sums over blocks of up to 128 pixels stay
+    below 2^24 quarters, so float32 adds them exactly, in any order.
+    """
+    h, w = rgb.shape[:2]
+    sums = np.empty((ny, nx, len(FEATURES), 4), np.float32)
+    counts = np.empty((ny, nx, 4), np.float32)
+    colour = np.empty((ny, nx, 3), np.float32)
+    top, quarter, zero = np.float32(254.5), np.float32(0.25), np.float32(0.0)
+    cols = _mirrored(np.arange(-1, nx * block + 1), w)
+    step = max(1, _STRIP_PX // block) * block
+    for y0 in range(0, ny * block, step):
+        y1 = min(ny * block, y0 + step)
+        b0, b1 = y0 // block, y1 // block
+        # The strip with a one-pixel ring of neighbours, channels first.
+        rows = _mirrored(np.arange(y0 - 1, y1 + 1), h)
+        v = np.ascontiguousarray(np.take(np.take(rgb, rows, axis=0)[..., :3], cols, axis=1).transpose(2, 0, 1),
+                                 dtype=np.float32)
+        if scale != 1.0:
+            v *= scale
+        clip = (v[0] <= zero) | (v[0] >= top) | (v[1] <= zero) | (v[1] >= top) | (v[2] <= zero) | (v[2] >= top)
+        bad = (clip[:-2, :-2] | clip[:-2, 1:-1] | clip[:-2, 2:] | clip[1:-1, :-2] | clip[1:-1, 1:-1]
+               | clip[1:-1, 2:] | clip[2:, :-2] | clip[2:, 1:-1] | clip[2:, 2:])
+        keep = (~bad).astype(np.float32)
+        centre = v[:, 1:-1, 1:-1]
+        neighbours = ((v[:, :-2, 1:-1], v[:, 2:, 1:-1], v[:, 1:-1, :-2], v[:, 1:-1, 2:]),  # cross
+                      (v[:, :-2, :-2], v[:, :-2, 2:], v[:, 2:, :-2], v[:, 2:, 2:]))        # diag
+        for k, (a, b, c, d) in enumerate(neighbours):
+            res = a + b
+            res += c
+            res += d
+            res *= quarter
+            np.subtract(centre, res, out=res)
+            res *= keep
+            planes = (res[0], res[1], res[2], res[0] - res[1], res[2] - res[1])
+            for f, plane in enumerate(planes):
+                _cell_sums(np.abs(plane), block, sums[b0:b1, :, 5 * k + f])
+        _cell_sums(keep, block, counts[b0:b1])
+        per_position = np.empty((b1 - b0, nx, 4), np.float32)
+        for i, channel in enumerate((0, 2, 1)):
+            _cell_sums(centre[channel], block, per_position)
+            colour[b0:b1, :, i] = per_position.sum(axis=2)
+    return sums, counts, colour
 
 
 def block_features(rgb: np.ndarray, block: int, full_scale: float, offset: float) -> BlockFeatures:
@@ -169,13 +186,7 @@ def block_features(rgb: np.ndarray, block: int, full_scale: float, offset: float
     h, w = rgb.shape[:2]
     ny, nx = h // block, w // block
     names = FEATURES
-    sums = np.zeros((ny, nx, len(names), 4), dtype=np.float32)
-    counts = np.zeros((ny, nx, 4), dtype=np.float32)
-    colour = np.zeros((ny, nx, 3), dtype=np.float32)
-    rows, cols = np.arange(h), np.arange(w)
-    _accumulate(rgb, block, ny, nx, np.float32(255.0 / full_scale),
-                _mirrored(rows - 1, h), _mirrored(rows + 1, h), _mirrored(cols - 1, w), _mirrored(cols + 1, w),
-                sums, counts, colour)
+    sums, counts, colour = _accumulate(rgb, block, ny, nx, np.float32(255.0 / full_scale))
     means = sums / np.maximum(counts, 1.0)[:, :, None, :]
     activity = means[:, :, names.index(("G", "cross"))].mean(axis=2)
     logs = np.log(means + np.float32(offset))
