@@ -25,6 +25,20 @@ def hwm_mb():
 """
 
 
+def compile_sources(tree: Path) -> str:
+    """Write the bytecode of ``tree``'s ``forensics_core`` and ``plugins`` (up-to-date files are skipped).
+
+    A wheel is compiled when installed; an editable install or a worktree is
+    not, and where Python may not write bytecode (``PYTHONDONTWRITEBYTECODE``)
+    every run would compile the project again, about 0.14 s of a 2 s run. Both
+    trees of a comparison are compiled alike. Returns the line the benchmarks
+    print about it.
+    """
+    subprocess.run([sys.executable, "-m", "compileall", "-q", str(tree / "forensics_core"), str(tree / "plugins")],
+                   check=True, stdout=subprocess.DEVNULL)
+    return f"bytecode of {tree} compiled, as a wheel install does"
+
+
 def parse_size(text: str) -> tuple[int, int]:
     """``"4000x3000"`` as ``(4000, 3000)``."""
     w, h = (int(v) for v in text.lower().split("x"))

@@ -24,6 +24,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from harness import compile_sources
+
 COMMANDS = (("--version",), ("--help",), ("plugins",))
 
 
@@ -50,6 +52,8 @@ def main() -> None:
     parser.add_argument("--baseline", type=Path, help="Source tree of the version to compare with.")
     args = parser.parse_args()
     trees = [("this tree", None)] + ([("baseline", args.baseline.resolve())] if args.baseline else [])
+    for _, tree in trees:
+        print(compile_sources(tree or Path(__file__).resolve().parent.parent))
     with tempfile.TemporaryDirectory() as tmp:
         shim, home = Path(tmp) / "shim", Path(tmp) / "home"
         shim.mkdir()
