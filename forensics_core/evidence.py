@@ -238,9 +238,9 @@ def _utf8(text: str) -> str:
         return text
 
 
-def _metadata(data: bytes) -> tuple[list[MetadataTag], str]:
-    """ExifTool's tags of ``data``, and the sentence naming the reader (or why Pillow's EXIF is all there is)."""
-    found = exiftool.read(data)
+def _metadata(reading: exiftool.Reading) -> tuple[list[MetadataTag], str]:
+    """ExifTool's tags of the evidence, and the sentence naming the reader (or why Pillow's EXIF is all there is)."""
+    found = reading.result()
     if found.error is not None:
         return [], (f"Pillow {_PILLOW_VERSION}, EXIF only (no MakerNotes, IPTC or ICC tags, little XMP): "
                     f"{found.error}")
@@ -467,65 +467,72 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
     hashed_at = datetime.now(timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z")
     if not data:
         raise EvidenceError("empty file")
-    # Pillow warns about what it tolerates in a file (EXIF offsets out of
-    # range, truncated tags); those are observations about the evidence, kept
-    # in the decoder note, not lines on the user's terminal.
-    printed: list[str] = []
-    with warnings.catch_warnings(record=True) as caught, _c_messages(printed):
-        warnings.simplefilter("always")
-        try:
-            img, others = _open_checked(data, max_pixels)
-        except EvidenceError:
-            raise
-        except UnidentifiedImageError:
-            raise EvidenceError("not an image (no known image format recognised)") from None
-        except (Image.DecompressionBombError, Image.DecompressionBombWarning):
-            raise EvidenceError(_too_many_pixels(max_pixels)) from None
-        except _DECODE_ERRORS as exc:
-            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            raise EvidenceError(f"corrupt or truncated image: {reason}") from None
+    # ExifTool starts on another core while Pillow decodes; a photo the
+    # intake refuses stops it.
+    reading = exiftool.start(data)
+    try:
+        # Pillow warns about what it tolerates in a file (EXIF offsets out of
+        # range, truncated tags); those are observations about the evidence, kept
+        # in the decoder note, not lines on the user's terminal.
+        printed: list[str] = []
+        with warnings.catch_warnings(record=True) as caught, _c_messages(printed):
+            warnings.simplefilter("always")
+            try:
+                img, others = _open_checked(data, max_pixels)
+            except EvidenceError:
+                raise
+            except UnidentifiedImageError:
+                raise EvidenceError("not an image (no known image format recognised)") from None
+            except (Image.DecompressionBombError, Image.DecompressionBombWarning):
+                raise EvidenceError(_too_many_pixels(max_pixels)) from None
+            except _DECODE_ERRORS as exc:
+                reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+                raise EvidenceError(f"corrupt or truncated image: {reason}") from None
 
-        # Once, here: the metadata check, its figure and the report all use
-        # this reading. The limit is Pillow's global, so it is held under the
-        # intake's lock; a non-JPEG's EXIF is found by opening the file again.
-        with _pixel_limit(max(max_pixels, _THUMBNAIL_MAX_PIXELS)):
-            thumbnail = read_thumbnail(data, str(img.format))
-        try:
-            exif = _read_exif(img, thumbnail is not None and thumbnail.named)
-        except (SyntaxError, ValueError, TypeError, KeyError, IndexError, OSError, EOFError, struct.error,
-                ZeroDivisionError, RecursionError) as exc:
-            # Broken EXIF is an observation about the file, not a reason to stop.
-            reason = str(exc).splitlines()[0][:200] if str(exc) else type(exc).__name__
-            exif = ExifSummary(unreadable=f"EXIF unreadable: {_safe_text(reason)}")
-    metadata, reader = _metadata(data)
-    quant = getattr(img, "quantization", None) or {}
-    info = EvidenceInfo(
-        path=str(p.resolve()),
-        name=p.name,
-        size=len(data),
-        sha256=sha256,
-        sha512=sha512,
-        md5=md5,
-        hashed_at=hashed_at,
-        format=str(img.format),
-        width=img.size[0],
-        height=img.size[1],
-        mode=img.mode,
-        orientation=exif.orientation,
-        icc_profile=bool(img.info.get("icc_profile")),
-        quantization_tables={str(k): [int(v) for v in table] for k, table in sorted(quant.items())},
-        exif=exif,
-        other_images=others,
-        decoder_note=_decoder_note(img),
-        metadata=metadata,
-        metadata_reader=reader,
-    )
-    with warnings.catch_warnings(record=True) as decoding, _c_messages(printed):
-        warnings.simplefilter("always")
-        try:
-            pixels = _pixel_array(img)
-        finally:
-            img.close()
+            # Once, here: the metadata check, its figure and the report all use
+            # this reading. The limit is Pillow's global, so it is held under the
+            # intake's lock; a non-JPEG's EXIF is found by opening the file again.
+            with _pixel_limit(max(max_pixels, _THUMBNAIL_MAX_PIXELS)):
+                thumbnail = read_thumbnail(data, str(img.format))
+            try:
+                exif = _read_exif(img, thumbnail is not None and thumbnail.named)
+            except (SyntaxError, ValueError, TypeError, KeyError, IndexError, OSError, EOFError, struct.error,
+                    ZeroDivisionError, RecursionError) as exc:
+                # Broken EXIF is an observation about the file, not a reason to stop.
+                reason = str(exc).splitlines()[0][:200] if str(exc) else type(exc).__name__
+                exif = ExifSummary(unreadable=f"EXIF unreadable: {_safe_text(reason)}")
+        quant = getattr(img, "quantization", None) or {}
+        info = EvidenceInfo(
+            path=str(p.resolve()),
+            name=p.name,
+            size=len(data),
+            sha256=sha256,
+            sha512=sha512,
+            md5=md5,
+            hashed_at=hashed_at,
+            format=str(img.format),
+            width=img.size[0],
+            height=img.size[1],
+            mode=img.mode,
+            orientation=exif.orientation,
+            icc_profile=bool(img.info.get("icc_profile")),
+            quantization_tables={str(k): [int(v) for v in table] for k, table in sorted(quant.items())},
+            exif=exif,
+            other_images=others,
+            decoder_note=_decoder_note(img),
+            metadata=[],
+            metadata_reader="",
+        )
+        with warnings.catch_warnings(record=True) as decoding, _c_messages(printed):
+            warnings.simplefilter("always")
+            try:
+                pixels = _pixel_array(img)
+            finally:
+                img.close()
+    except BaseException:
+        reading.cancel()
+        raise
+    info.metadata, info.metadata_reader = _metadata(reading)
     tolerated = sorted({_safe_text(str(w.message)) for w in caught + decoding} | {_safe_text(t) for t in printed})[:5]
     if tolerated:
         note = "The decoder tolerated: " + "; ".join(tolerated) + "."

@@ -68,24 +68,63 @@ def read(data: bytes, timeout_s: float = 30.0) -> ExifToolResult:
         With ``error`` set (and no tags) when ExifTool is absent, fails, times
         out or prints something that is not its JSON.
     """
+    return start(data).result(timeout_s)
+
+
+def start(data: bytes) -> Reading:
+    """Start ExifTool on ``data`` and return at once; :meth:`Reading.result` waits for its tags.
+
+    ExifTool spends most of its time starting Perl, which runs on another core
+    while the caller decodes the photo.
+    """
     exe = shutil.which("exiftool")
     if exe is None:
-        return ExifToolResult(None, [], "ExifTool is not installed")
+        return Reading(None, data, "ExifTool is not installed")
     try:
-        done = subprocess.run([exe, *ARGUMENTS, "-"], input=data, capture_output=True, timeout=timeout_s,
-                              check=False)
-    except subprocess.TimeoutExpired:
-        return ExifToolResult(None, [], f"ExifTool did not finish within {timeout_s:g} s")
+        process = subprocess.Popen([exe, *ARGUMENTS, "-"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                   stderr=subprocess.PIPE)
     except OSError as exc:
-        return ExifToolResult(None, [], f"ExifTool could not be run: {exc.strerror or exc}")
+        return Reading(None, data, f"ExifTool could not be run: {exc.strerror or exc}")
+    return Reading(process, data, None)
+
+
+class Reading:
+    """An ExifTool run under way (or one that could not start); call :meth:`result` or :meth:`cancel` once."""
+
+    def __init__(self, process: subprocess.Popen[bytes] | None, data: bytes, error: str | None) -> None:
+        self._process, self._data, self._error = process, data, error
+
+    def cancel(self) -> None:
+        """Stop the run without reading it (the intake refused the photo)."""
+        if self._process is not None:
+            self._process.kill()
+            self._process.communicate()
+            self._process = None
+
+    def result(self, timeout_s: float = 30.0) -> ExifToolResult:
+        """The tags, after sending the bytes and waiting at most ``timeout_s`` seconds."""
+        process, self._process = self._process, None
+        if process is None:
+            return ExifToolResult(None, [], self._error or "ExifTool was not run")
+        try:
+            stdout, stderr = process.communicate(self._data, timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.communicate()
+            return ExifToolResult(None, [], f"ExifTool did not finish within {timeout_s:g} s")
+        return _parsed(stdout, stderr, process.returncode)
+
+
+def _parsed(stdout: bytes, stderr: bytes, returncode: int) -> ExifToolResult:
+    """ExifTool's JSON output as tags, or why it is not."""
     try:
-        parsed = json.loads(done.stdout.decode("utf-8", "replace"))
+        parsed = json.loads(stdout.decode("utf-8", "replace"))
         record = parsed[0] if isinstance(parsed, list) and parsed and isinstance(parsed[0], dict) else None
     except (ValueError, RecursionError):
         record = None
     if record is None:
-        first = done.stderr.decode("utf-8", "replace").strip().splitlines()[:1]
-        return ExifToolResult(None, [], f"ExifTool read nothing (exit {done.returncode}"
+        first = stderr.decode("utf-8", "replace").strip().splitlines()[:1]
+        return ExifToolResult(None, [], f"ExifTool read nothing (exit {returncode}"
                                          f"{': ' + first[0][:200] if first else ''})")
     tags = []
     for key, value in record.items():
@@ -97,5 +136,5 @@ def read(data: bytes, timeout_s: float = 30.0) -> ExifToolResult:
             break
     # The version as ExifTool printed it (12.60 stays 12.60), read from the
     # same output rather than from a second run of ``exiftool -ver``.
-    stated = _VERSION.search(done.stdout)
+    stated = _VERSION.search(stdout)
     return ExifToolResult(stated.group(1).decode("ascii") if stated else "of unstated version", tags)

@@ -5,7 +5,7 @@ import subprocess
 
 import pytest
 
-from forensics_core import exiftool, load_evidence
+from forensics_core import EvidenceError, exiftool, load_evidence
 from forensics_plugins.metadata.detector import analyse
 from forensics_plugins.metadata.spec import DEFAULT_PARAMS
 from metadata_helpers import evidence_from, exif_bytes, jpeg, photo
@@ -103,3 +103,23 @@ def test_the_report_appendix_lists_exiftool_groups(data_dir, tmp_path):
 def test_the_version_stated_is_the_one_installed(data_dir):
     found = exiftool.read((data_dir / "exif" / "Canon_40D.jpg").read_bytes())
     assert found.error is None and found.version == _installed_version()
+
+
+@pytest.mark.skipif(shutil.which("exiftool") is None, reason="needs ExifTool")
+def test_exiftool_runs_while_the_photo_is_decoded_and_a_refused_photo_stops_it(data_dir, tmp_path, monkeypatch):
+    data = (data_dir / "exif" / "Canon_40D.jpg").read_bytes()
+    assert exiftool.start(data).result() == exiftool.read(data)
+    started = []
+    real_start = exiftool.start
+
+    def start(data):
+        reading = real_start(data)
+        started.append(reading._process)
+        return reading
+
+    monkeypatch.setattr(exiftool, "start", start)
+    assert load_evidence(data_dir / "exif" / "Canon_40D.jpg").info.metadata
+    (tmp_path / "notes.jpg").write_bytes(b"not a photo at all")
+    with pytest.raises(EvidenceError, match="not an image"):
+        load_evidence(tmp_path / "notes.jpg")
+    assert len(started) == 2 and all(process.returncode is not None for process in started)
