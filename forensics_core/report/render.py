@@ -28,7 +28,7 @@ from markupsafe import Markup
 from ..calibration.model import WEAK_SUPPORT_LR
 from ..defaults import PAPER_SIZES
 from ..evidence import Evidence
-from ..findings import ExifSummary, Findings
+from ..findings import ExifSummary, Findings, Verdict
 from ..fusion import LR_POLICY
 from ..plugins import PluginHost
 from ..text import visible
@@ -277,7 +277,7 @@ def _summary(findings: Findings) -> dict[str, Any]:
     }
 
 
-def _tension(verdict, lr_summary: dict[str, Any] | None, rows: Sequence[dict[str, Any]]) -> str | None:
+def _tension(verdict: Verdict, lr_summary: dict[str, Any] | None, rows: Sequence[dict[str, Any]]) -> str | None:
     """What page 1 says when the triage's outcome and the likelihood ratio point different ways, else None.
 
     The triage rule tests each detector's trace against a level fixed in
