@@ -105,8 +105,8 @@ def estimate(observed: np.ndarray, unquantised: np.ndarray, q2: int, rng: np.ran
     noise = rng.normal(0.0, _ROUNDING_SD, unquantised.size)
     steps = np.arange(q2 + 1, 3 * q2 + 13)
     # Simulated a few steps at a time, so that memory stays near a few times
-    # the coefficients' own whatever the number of steps (up to 500 for a
-    # quality-1 table).
+    # the coefficients' own whatever the number of steps (2 q2 + 12, over 500
+    # for a quality-1 table).
     chunk = max(1, _SIMULATED_VALUES // max(unquantised.size, 1))
     p_double = np.concatenate([
         _histograms(np.round((np.round(unquantised / q1) * q1 + noise) / q2).astype(np.int64))
