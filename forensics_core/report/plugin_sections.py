@@ -1,10 +1,11 @@
 """Detector sections: what each plugin contributes, rendered generically and contained.
 
-Each plugin's ``forensics_report_section`` is called on its own (through
-:meth:`PluginHost.call_each`), and its template is rendered in a sandboxed,
-autoescaping Jinja2 environment: a template cannot reach Python internals,
+Each plugin's ``forensics_report_section`` is called on its own, in a forked
+child as detectors are, and what it returns is rendered there: its figures
+decoded and reduced for the page, its template filled in a sandboxed,
+autoescaping Jinja2 environment (a template cannot reach Python internals,
 and every value from ``context`` is escaped unless the plugin's own template
-text put the markup there. A plugin whose hook raises, returns something
+text put the markup there). A plugin whose hook raises, returns something
 other than a :class:`ReportSection`, or whose template fails, gets a section
 that says so, followed by its finding in generic form; the report still renders.
 """
@@ -12,7 +13,7 @@ that says so, followed by its finding in generic form; the report still renders.
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 
@@ -20,7 +21,7 @@ from jinja2 import StrictUndefined
 from jinja2.sandbox import ImmutableSandboxedEnvironment
 from markupsafe import Markup
 
-from ..containment import Child, PluginFault, jobs_for, wait_any
+from ..containment import Child, PluginFault, can_fork, jobs_for, wait_any
 from ..evidence import Evidence
 from ..findings import DetectorFinding
 from ..plugins import PluginHost, one_line
@@ -135,6 +136,20 @@ def _from_outcome(finding: DetectorFinding, error: BaseException | None, value: 
         return _failed(finding, f"its section could not be rendered: {one_line(exc)}")
 
 
+def _rendered(impl: Callable[..., object], finding: DetectorFinding, evidence: Evidence) -> DetectorSection | None:
+    """Call a plugin's section hook and render what it returns; None when it declined.
+
+    Runs where the hook runs, in its contained child, so that decoding the
+    plugin's figures and filling its template are contained too: a figure
+    that crashes its decoder or hangs costs only that section.
+    """
+    try:
+        value = impl(finding=finding, evidence=evidence)
+    except Exception as exc:
+        return _from_outcome(finding, exc, None)
+    return _from_outcome(finding, None, value)
+
+
 def section_for(host: PluginHost | None, finding: DetectorFinding, evidence: Evidence,
                 timeout_s: float | None = None) -> DetectorSection:
     """The section of one finding, from the plugin that registered its detector.
@@ -144,14 +159,7 @@ def section_for(host: PluginHost | None, finding: DetectorFinding, evidence: Evi
     becomes the section's ``failure``; the hook runs in a child process, as
     detectors do.
     """
-    if host is None or finding.plugin not in host.records:
-        return DetectorSection(finding, finding.name)
-    for outcome in host.call_each("forensics_report_section", plugins=[finding.plugin], contained_s=timeout_s or SECTION_TIMEOUT_S,
-                                  finding=finding, evidence=evidence):
-        section = _from_outcome(finding, outcome.error, outcome.value)
-        if section is not None:
-            return section
-    return DetectorSection(finding, finding.name)
+    return sections_for(host, [finding], evidence, timeout_s, jobs=1)[0]
 
 
 def sections_for(host: PluginHost | None, findings: Sequence[DetectorFinding], evidence: Evidence,
@@ -160,30 +168,30 @@ def sections_for(host: PluginHost | None, findings: Sequence[DetectorFinding], e
 
     Each hook runs contained as in :func:`section_for`, which this is with
     ``jobs=1``, on large photos or where the platform cannot fork
-    (:func:`~forensics_core.containment.jobs_for`); the sections are the
-    same whatever ``jobs`` is.
+    (:func:`~forensics_core.containment.jobs_for`; without fork the hooks
+    run in this process); the sections are the same whatever ``jobs`` is.
     """
     jobs = jobs_for(evidence.info.width * evidence.info.height, jobs)
-    if host is None or jobs == 1:
-        return [section_for(host, f, evidence, timeout_s) for f in findings]
     out: dict[int, DetectorSection] = {}
-    pending = list(enumerate(findings))
+    pending: list[tuple[int, Callable[[], DetectorSection | None]]] = []
+    for i, finding in enumerate(findings):
+        impl = (host.implementation("forensics_report_section", finding.plugin)
+                if host is not None and finding.plugin in host.records else None)
+        if impl is None:
+            out[i] = DetectorSection(finding, finding.name)
+        elif can_fork():
+            pending.append((i, partial(_rendered, impl, finding, evidence)))
+        else:
+            out[i] = _rendered(impl, finding, evidence) or DetectorSection(finding, finding.name)
     running: dict[Child, int] = {}
     while pending or running:
         while pending and len(running) < jobs:
-            i, finding = pending.pop(0)
-            impl = (host.implementation("forensics_report_section", finding.plugin)
-                    if finding.plugin in host.records else None)
-            if impl is None:
-                out[i] = DetectorSection(finding, finding.name)
-            else:
-                running[Child(partial(impl, finding=finding, evidence=evidence),
-                              timeout_s or SECTION_TIMEOUT_S)] = i
-        if running:
-            for child in wait_any(list(running)):
-                i = running.pop(child)
-                outcome, _ = child.collect()
-                error = PluginFault(outcome[1]) if outcome[0] == "error" else None
-                out[i] = (_from_outcome(findings[i], error, None if error else outcome[1])
-                          or DetectorSection(findings[i], findings[i].name))
+            i, call = pending.pop(0)
+            running[Child(call, timeout_s or SECTION_TIMEOUT_S)] = i
+        for child in wait_any(list(running)):
+            i = running.pop(child)
+            outcome, _ = child.collect()
+            section = (_from_outcome(findings[i], PluginFault(outcome[1]), None) if outcome[0] == "error"
+                       else outcome[1])
+            out[i] = section or DetectorSection(findings[i], findings[i].name)
     return [out[i] for i in range(len(findings))]

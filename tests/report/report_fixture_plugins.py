@@ -79,6 +79,17 @@ class SectionExiting(_Detector):
         os._exit(0)
 
 
+class SectionTemplateHanging(_Detector):
+    """A hook that returns at once with a template whose rendering never ends (10^10 empty loops)."""
+
+    name = "section_template_hanging"
+
+    @hookimpl
+    def forensics_report_section(self, finding, evidence):
+        return ReportSection("Endless", "{% for i in range(100000) %}{% for j in range(100000) %}{% endfor %}"
+                                        "{% endfor %}")
+
+
 class SectionWrongType(_Detector):
     name = "section_wrong_type"
 
@@ -119,3 +130,4 @@ class NoSection(_Detector):
 sectioned, section_raising, section_wrong_type = Sectioned(), SectionRaising(), SectionWrongType()
 section_escapes, section_fetches, no_section = SectionEscapes(), SectionFetches(), NoSection()
 section_hanging, section_exiting = SectionHanging(), SectionExiting()
+section_template_hanging = SectionTemplateHanging()

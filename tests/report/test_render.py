@@ -193,9 +193,11 @@ def test_a_failing_section_is_reported_and_the_report_still_renders(tmp_path, pl
 
 @pytest.mark.parametrize("jobs", [1, 2])
 @pytest.mark.parametrize("plugin, reason", [("section_hanging", "timed out after 3 s"),
+                                            ("section_template_hanging", "timed out after 3 s"),
                                             ("section_exiting", "process died (exit code 0)")])
 def test_a_section_hook_that_hangs_or_ends_its_process_costs_only_its_section(tmp_path, monkeypatch, plugin, reason,
                                                                               jobs):
+    # The plugin's template is filled in the hook's child too, so one that never finishes is stopped like a hook.
     monkeypatch.setattr("forensics_core.report.plugin_sections.SECTION_TIMEOUT_S", 3.0)
     report = render(hostile_jpeg(tmp_path / "p.jpg"), plugin, "sectioned", jobs=jobs)
     assert f"{plugin}: report section failed" in report.html and reason in report.html
