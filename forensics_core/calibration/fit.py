@@ -124,16 +124,40 @@ def scene(name: str, conditions: dict[str, Any]) -> str:
     return f"{prefix}:{stem}"
 
 
+def _same_bytes_same_scene(rows: Sequence[dict[str, Any]], scenes: list[str]) -> list[str]:
+    """``scenes`` with the scenes of photos whose bytes are identical (same SHA-256) joined into one.
+
+    A corpus can hold one file under two names (the IMD pairs hold two
+    originals twice, each with its own edit): were the two in different
+    folds, a photo would be judged by a calibrator fitted on itself.
+    """
+    parent = {s: s for s in scenes}
+
+    def root(s: str) -> str:
+        while parent[s] != s:
+            s = parent[s]
+        return s
+
+    first: dict[str, str] = {}
+    for row, s in zip(rows, scenes):
+        digest = row.get("sha256")
+        if digest:
+            a, b = root(first.setdefault(digest, s)), root(s)
+            if a != b:
+                parent[max(a, b)] = min(a, b)
+    return [root(s) for s in scenes]
+
+
 def cases_from_rows(rows: Sequence[dict[str, Any]]) -> list[Case]:
     """Calibration cases from a validation record's per-photo rows (photos that failed intake left out)."""
+    kept = [c for c in rows if not c.get("error")]
+    scenes = _same_bytes_same_scene(kept, [scene(c["name"], c.get("conditions", {})) for c in kept])
     cases = []
-    for c in rows:
-        if c.get("error"):
-            continue
+    for c, group in zip(kept, scenes):
         p = {name: (d["p_value"] if d["status"] == "ok" else None) for name, d in c["detectors"].items()}
         score = {name: (d.get("score") if d["status"] == "ok" else None) for name, d in c["detectors"].items()}
         conditions = c.get("conditions", {})
-        cases.append(Case(name=c["name"], scene=scene(c["name"], conditions), hp=bool(c["spliced"]), p_values=p,
+        cases.append(Case(name=c["name"], scene=group, hp=bool(c["spliced"]), p_values=p,
                           set=str(conditions.get("set", "")), format=c.get("format"), megapixels=c.get("megapixels"),
                           scores=score))
     return cases

@@ -10,7 +10,7 @@ import pytest
 from click.testing import CliRunner
 
 from forensics_core.calibration import CalibrationError, Calibrator, Fusion, feature, load, verbal
-from forensics_core.calibration.fit import CalibratorInput, calibrate, costs, scene
+from forensics_core.calibration.fit import CalibratorInput, calibrate, cases_from_rows, costs, scene
 from forensics_core.calibration.model import CalibrationSet
 from forensics_core.cli import cli
 
@@ -95,6 +95,18 @@ def test_scene_keeps_variants_of_one_photo_together():
     assert scene("imd_pairs__forged_I02_dm545yj_0", {"set": "imd"}) == scene("imd_pairs__original_I02_6vzqfn",
                                                                                {"set": "imd"})
     assert scene("x__a", {"scene": "s9"}) == "s9"
+
+
+def test_one_file_held_under_two_names_is_one_scene_with_the_edits_of_both():
+    def row(name, digest, spliced):
+        return {"name": name, "sha256": digest, "spliced": spliced, "conditions": {"set": "imd"},
+                "detectors": {"d": {"status": "ok", "p_value": 0.5, "score": None}}}
+
+    rows = [row("imd_pairs__original_I24_4qhnk9", "aa", False), row("imd_pairs__forged_I24_d4t4tzx_0", "b1", True),
+            row("imd_pairs__original_I34_4qhnk9", "aa", False), row("imd_pairs__forged_I34_d4t7pgj_0", "b2", True),
+            row("imd_pairs__original_I02_6vzqfn", "cc", False), row("bad", "aa", False) | {"error": "unreadable"}]
+    scenes = [c.scene for c in cases_from_rows(rows)]
+    assert len(scenes) == 5 and len(set(scenes[:4])) == 1 and scenes[4] != scenes[0]
 
 
 def test_cli_writes_a_loadable_file_and_prints_the_costs(tmp_path):
