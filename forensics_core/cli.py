@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import json
 import logging
-import math
 import os
 import sys
 from dataclasses import dataclass
@@ -63,12 +62,12 @@ def _strength_words(verdict: Verdict) -> str:
     no p-value can leave it "consistent" while the likelihood ratio supports
     manipulation, so the line states both.
     """
-    from .calibration.model import WEAK_SUPPORT_LR
+    from .calibration.model import supports
 
     lr = verdict.likelihood_ratio
     if lr is None or lr.log10_lr is None:
         return ""
-    words = f", {lr.verbal}" if abs(lr.log10_lr) >= math.log10(WEAK_SUPPORT_LR) else ""
+    words = f", {lr.verbal}" if supports(lr.log10_lr) else ""
     return f"; fused LR {10.0 ** lr.log10_lr:.3g}{words}"
 
 

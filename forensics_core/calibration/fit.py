@@ -58,7 +58,7 @@ import numpy as np
 from scipy.special import expit
 
 from .. import __version__
-from .model import WEAK_SUPPORT_LR, Calibrator, CalibrationError, CalibrationSet, Fusion, four_parameter_log10_lr
+from .model import Calibrator, CalibrationError, CalibrationSet, Fusion, four_parameter_log10_lr, supports
 
 FOLDS = 5
 # Photos under each proposition, with a score, below which the four-parameter
@@ -391,8 +391,7 @@ def supports_hp(rows: Sequence[dict[str, Any]],
         return {}
     present = [d for d in names if any(d in c.p_values for c in cases)]
     per, _ = cross_validated(sorted({d for c in cases for d in c.p_values}), cases, features)
-    least = math.log10(WEAK_SUPPORT_LR)
-    return {d: {c.name: bool(per[d][i] >= least) for i, c in enumerate(cases)} for d in present}
+    return {d: {c.name: supports(per[d][i]) > 0 for i, c in enumerate(cases)} for d in present}
 
 
 def _costs_entry(llrs: np.ndarray, y: np.ndarray) -> dict[str, Any]:

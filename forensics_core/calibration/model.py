@@ -279,13 +279,25 @@ WEAK_SUPPORT_LR = 2.0
 "no support for either proposition"."""
 
 
+def supports(log10_lr: float | None) -> int:
+    """The side an LR supports as the verbal scale reads it: 1 for Hp, -1 for Hd, 0 for neither (or no LR).
+
+    Every place that says whether a finding supports a side (the report's
+    page 1, the photo's line, the validation's operating point) asks this,
+    so none can disagree with the words :func:`verbal` prints.
+    """
+    if log10_lr is None or 10.0 ** abs(log10_lr) < WEAK_SUPPORT_LR:
+        return 0
+    return 1 if log10_lr > 0 else -1
+
+
 def verbal(log10_lr: float) -> str:
     """ENFSI's verbal equivalent of an LR (Guideline for Evaluative Reporting, 2015, p. 17), for either side."""
     lr = 10.0 ** abs(log10_lr)
     steps: Sequence[tuple[float, str]] = ((1_000_000.0, "extremely strong"), (10_000.0, "very strong"),
                                           (1_000.0, "strong"), (100.0, "moderately strong"), (10.0, "moderate"),
                                           (WEAK_SUPPORT_LR, "weak"))
-    if lr < WEAK_SUPPORT_LR:
+    if not supports(log10_lr):
         return "no support for either proposition (the findings are about as probable under both)"
     words = next(w for bound, w in steps if lr >= bound)
     side = "Hp (manipulation)" if log10_lr > 0 else "Hd (as the camera produced it)"

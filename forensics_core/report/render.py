@@ -13,7 +13,6 @@ import base64
 import hashlib
 import json
 import logging
-import math
 import shlex
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -25,7 +24,7 @@ from typing import Any
 from jinja2 import Environment, FunctionLoader, StrictUndefined
 from markupsafe import Markup
 
-from ..calibration.model import WEAK_SUPPORT_LR
+from ..calibration.model import WEAK_SUPPORT_LR, supports
 from ..defaults import PAPER_SIZES
 from ..evidence import Evidence
 from ..findings import ExifSummary, Findings, Verdict
@@ -289,9 +288,9 @@ def _tension(verdict: Verdict, lr_summary: dict[str, Any] | None, rows: Sequence
     lr = verdict.likelihood_ratio
     if verdict.policy == LR_POLICY or lr is None or lr.log10_lr is None or lr_summary is None:
         return None
-    weak = math.log10(WEAK_SUPPORT_LR)
+    side = supports(lr.log10_lr)
     carriers = lr_summary["contributed"]
-    if verdict.label.value == "consistent" and lr.log10_lr >= weak:
+    if verdict.label.value == "consistent" and side > 0:
         untested = ", ".join(r["name"] for r in rows if r["role"] == "advisory")
         left_out = f" ({untested} state none and are left out of it)" if untested else ""
         return (f"The outcome and the strength point different ways. No detector's test rejected an original at the "
@@ -299,7 +298,7 @@ def _tension(verdict: Verdict, lr_summary: dict[str, Any] | None, rows: Sequence
                 f"detectors that state a p-value{left_out}; the likelihood ratio weighs every calibrated detector. "
                 f"The outcome is therefore no sign that the photo is an original: read the sections of the detectors "
                 f"that carry the likelihood ratio ({carriers}).")
-    if verdict.label.value == "inconsistent" and lr.log10_lr <= -weak:
+    if verdict.label.value == "inconsistent" and side < 0:
         return (f"The outcome and the strength point different ways. A detector's test rejected an original at the "
                 f"stated level, yet the calibrated likelihood ratio gives {lr.verbal}. A rejection says how "
                 f"unusual the trace is among originals, not how much more probable it is after manipulation; on the "
@@ -322,9 +321,8 @@ def _lr_summary(verdict, detectors) -> dict[str, Any] | None:
     # A detector whose LR is not 1 but within the scale's "no support" band
     # (a calibrator with no measured power gives such LRs on every photo)
     # is named apart, so that the list says who carries the evidence.
-    weak = math.log10(WEAK_SUPPORT_LR)
     own = {d.name: d.log10_lr for d in detectors}
-    supporting = [n for n in lr.contributed if abs(own.get(n) or 0.0) >= weak]
+    supporting = [n for n in lr.contributed if supports(own.get(n))]
     slight = [n for n in lr.contributed if n not in supporting]
     return {
         "hp": lr.hp, "hd": lr.hd, "sentence": sentence, "verbal": lr.verbal,

@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 from forensics_core.calibration import CalibrationError, Calibrator, Fusion, feature, load, verbal
 from forensics_core.calibration.fit import CalibratorInput, calibrate, cases_from_rows, costs, scene
-from forensics_core.calibration.model import CalibrationSet
+from forensics_core.calibration.model import CalibrationSet, supports
 from forensics_core.cli import cli
 
 
@@ -132,6 +132,14 @@ def test_verbal_equivalents():
     assert verbal(1.5) == "moderate support for Hp (manipulation)"
     assert verbal(-2.5) == "moderately strong support for Hd (as the camera produced it)"
     assert verbal(7.0).startswith("extremely strong")
+
+
+def test_the_side_an_lr_supports_is_the_side_its_words_name():
+    for log10_lr in np.linspace(-1.0, 1.0, 401).tolist() + [math.log10(2.0), -math.log10(2.0)]:
+        side = supports(log10_lr)
+        words = verbal(log10_lr)
+        assert side == (1 if "for Hp" in words else -1 if "for Hd" in words else 0), (log10_lr, words)
+    assert supports(None) == 0 and supports(math.log10(2.0)) == 1 and supports(-0.3) == 0
 
 
 def _analyze(*args):
