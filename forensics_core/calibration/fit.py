@@ -132,7 +132,8 @@ def _same_bytes_same_scene(rows: Sequence[dict[str, Any]], scenes: list[str]) ->
 
     A corpus can hold one file under two names (the IMD pairs hold two
     originals twice, each with its own edit): were the two in different
-    folds, a photo would be judged by a calibrator fitted on itself.
+    scenes, a photo left out would be judged by a calibrator fitted on its
+    own bytes.
     """
     parent = {s: s for s in scenes}
 
