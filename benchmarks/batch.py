@@ -35,7 +35,8 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-OUT = Path(__file__).resolve().parent / "out"
+from harness import OUT
+
 PHOTOS = OUT / "batch_6mp"
 SIZE = (3000, 2000)
 

@@ -22,9 +22,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from harness import fresh_runs, parse_size, print_stages
+from harness import OUT, fresh_runs, parse_size, print_stages
 
-OUT = Path(__file__).resolve().parent / "out"
 BAND_ROWS = 750
 
 _CHILD = r"""

@@ -37,10 +37,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from harness import compile_sources
-
-ROOT = Path(__file__).resolve().parent.parent
-OUT = ROOT / "benchmarks" / "out"
+from harness import OUT, ROOT, compile_sources
 
 _CHILD = r"""
 import json, os, re, resource, sys, tempfile, time

@@ -17,6 +17,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+ROOT = Path(__file__).resolve().parent.parent
+"""The repository's root, whose ``forensics_core`` and ``plugins`` are measured unless ``--baseline`` names another tree."""
+OUT = ROOT / "benchmarks" / "out"
+"""Where the benchmarks render their photos once, and keep them."""
+
 CHILD_PRELUDE = r"""
 import json, re, sys, time
 def hwm_mb():

@@ -17,9 +17,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from harness import fresh_runs, parse_size, print_stages
+from harness import OUT, fresh_runs, parse_size, print_stages
 
-OUT = Path(__file__).resolve().parent / "out"
 
 _CHILD = r"""
 import forensics_core

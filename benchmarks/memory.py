@@ -29,7 +29,7 @@ import tempfile
 import time
 from pathlib import Path
 
-OUT = Path(__file__).resolve().parent / "out"
+from harness import OUT
 
 
 def photo(mp: float) -> Path:

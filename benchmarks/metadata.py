@@ -23,9 +23,8 @@ import io
 import struct
 from pathlib import Path
 
-from harness import fresh_runs, parse_size, print_stages
+from harness import OUT, fresh_runs, parse_size, print_stages
 
-OUT = Path(__file__).resolve().parent / "out"
 
 _CHILD = r"""
 from forensics_core import DetectorFinding, Status

@@ -15,9 +15,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from harness import photo_benchmark
+from harness import OUT, photo_benchmark
 
-OUT = Path(__file__).resolve().parent / "out"
 
 _CHILD = r"""
 import forensics_core

@@ -24,7 +24,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from harness import compile_sources
+from harness import ROOT, compile_sources
 
 COMMANDS = (("--version",), ("--help",), ("plugins",))
 
@@ -53,7 +53,7 @@ def main() -> None:
     args = parser.parse_args()
     trees = [("this tree", None)] + ([("baseline", args.baseline.resolve())] if args.baseline else [])
     for _, tree in trees:
-        print(compile_sources(tree or Path(__file__).resolve().parent.parent))
+        print(compile_sources(tree or ROOT))
     with tempfile.TemporaryDirectory() as tmp:
         shim, home = Path(tmp) / "shim", Path(tmp) / "home"
         shim.mkdir()
