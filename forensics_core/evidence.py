@@ -502,27 +502,9 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
                 reason = str(exc).splitlines()[0][:200] if str(exc) else type(exc).__name__
                 exif = ExifSummary(unreadable=f"EXIF unreadable: {_safe_text(reason)}")
         quant = getattr(img, "quantization", None) or {}
-        info = EvidenceInfo(
-            path=str(p.resolve()),
-            name=p.name,
-            size=len(data),
-            sha256=sha256,
-            sha512=sha512,
-            md5=md5,
-            hashed_at=hashed_at,
-            format=str(img.format),
-            width=img.size[0],
-            height=img.size[1],
-            mode=img.mode,
-            orientation=exif.orientation,
-            icc_profile=bool(img.info.get("icc_profile")),
-            quantization_tables={str(k): [int(v) for v in table] for k, table in sorted(quant.items())},
-            exif=exif,
-            other_images=others,
-            decoder_note=_decoder_note(img),
-            metadata=[],
-            metadata_reader="",
-        )
+        fmt, (width, height), mode = str(img.format), img.size, img.mode
+        icc_profile = bool(img.info.get("icc_profile"))
+        notes = [_decoder_note(img)]
         with warnings.catch_warnings(record=True) as decoding, _c_messages(printed):
             warnings.simplefilter("always")
             try:
@@ -532,13 +514,33 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
     except BaseException:
         reading.cancel()
         raise
-    info.metadata, info.metadata_reader = _metadata(reading)
+    metadata, metadata_reader = _metadata(reading)
     tolerated = sorted({_safe_text(str(w.message)) for w in caught + decoding} | {_safe_text(t) for t in printed})[:5]
     if tolerated:
-        note = "The decoder tolerated: " + "; ".join(tolerated) + "."
-        info.decoder_note = f"{info.decoder_note} {note}" if info.decoder_note else note
+        notes.append("The decoder tolerated: " + "; ".join(tolerated) + ".")
     if pixels.dtype.kind == "f" and not np.isfinite(pixels).all():
         bad = int(pixels.size - np.isfinite(pixels).sum())
-        note = f"{bad:,} sample(s) of the stored grid are not finite numbers (NaN or infinite); the detectors read them as 0."
-        info.decoder_note = f"{info.decoder_note} {note}" if info.decoder_note else note
+        notes.append(f"{bad:,} sample(s) of the stored grid are not finite numbers (NaN or infinite); the detectors "
+                     f"read them as 0.")
+    info = EvidenceInfo(
+        path=str(p.resolve()),
+        name=p.name,
+        size=len(data),
+        sha256=sha256,
+        sha512=sha512,
+        md5=md5,
+        hashed_at=hashed_at,
+        format=fmt,
+        width=width,
+        height=height,
+        mode=mode,
+        orientation=exif.orientation,
+        icc_profile=icc_profile,
+        quantization_tables={str(k): [int(v) for v in table] for k, table in sorted(quant.items())},
+        exif=exif,
+        other_images=others,
+        decoder_note=" ".join(n for n in notes if n) or None,
+        metadata=metadata,
+        metadata_reader=metadata_reader,
+    )
     return Evidence(info=info, data=data, pixels=pixels, max_pixels=max_pixels, thumbnail=thumbnail)
