@@ -50,6 +50,15 @@ is the likelihood ratio calibrated on real photos
 (:mod:`forensics_core.calibration`), whose authentic photos include real
 repetition.
 
+Why not a residual that keeps the sensor noise alone: an adaptive Wiener
+residual (the structure damped by the local signal-to-noise ratio), measured
+on the same corpus, takes the wallpaper, the facades and I36 below 0.1, but
+also 83 of the 110 MICC-F220 copies, whose noise their compression removed.
+What a compressed copy shares is its texture below the scale of its
+structure, as a print does. With at most five authentic photos above the
+threshold it found 27 of the MICC copies, against 105 for the median
+residual.
+
 References
 ----------
 .. [1] I. Amerini, L. Ballan, R. Caldelli, A. Del Bimbo, G. Serra, A SIFT-based
