@@ -135,21 +135,16 @@ def _same_bytes_same_scene(rows: Sequence[dict[str, Any]], scenes: list[str]) ->
     scenes, a photo left out would be judged by a calibrator fitted on its
     own bytes.
     """
-    parent = {s: s for s in scenes}
+    from scipy.cluster.hierarchy import DisjointSet
 
-    def root(s: str) -> str:
-        while parent[s] != s:
-            s = parent[s]
-        return s
-
+    joined = DisjointSet(scenes)
     first: dict[str, str] = {}
     for row, s in zip(rows, scenes):
         digest = row.get("sha256")
         if digest:
-            a, b = root(first.setdefault(digest, s)), root(s)
-            if a != b:
-                parent[max(a, b)] = min(a, b)
-    return [root(s) for s in scenes]
+            joined.merge(first.setdefault(digest, s), s)
+    # The joined scene is named after its first name in sorted order, whatever order the rows came in.
+    return [min(joined.subset(s)) for s in scenes]
 
 
 def cases_from_rows(rows: Sequence[dict[str, Any]]) -> list[Case]:
