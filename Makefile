@@ -54,6 +54,7 @@ bench: bytecode
 	$(PY) benchmarks/lens.py
 	$(PY) benchmarks/report.py
 	$(PY) benchmarks/end_to_end.py
+	$(PY) benchmarks/report_stages.py
 
 check-python:
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "forensics needs Python >= 3.11; set PYTHON=python3.11 or newer")'
