@@ -48,6 +48,22 @@ def _inside(path: Path, folder: Path) -> bool:
     return path == folder or folder in path.parents
 
 
+def _resolved(path: Path) -> Path:
+    """``path`` resolved; made absolute only where its links loop, which resolving cannot end."""
+    try:
+        return path.resolve()
+    except (OSError, RuntimeError):  # RuntimeError: a loop, before Python 3.13
+        return Path(os.path.abspath(path))
+
+
+def _is_folder(entry: os.DirEntry) -> bool:
+    """Whether a folder entry is a folder; an entry that cannot be followed (a link that loops) is not."""
+    try:
+        return entry.is_dir()
+    except OSError:
+        return False
+
+
 def discover(inputs: Sequence[Path], out_dir: Path, recursive: bool = False) -> list[tuple[Path, str | None]]:
     """The files under ``inputs``, each once, with the reason it cannot be used (or None).
 
@@ -66,7 +82,7 @@ def discover(inputs: Sequence[Path], out_dir: Path, recursive: bool = False) -> 
     seen: set[Path] = set()
 
     def add(path: Path, reason: str | None = None) -> None:
-        key = path.resolve()
+        key = _resolved(path)
         if key not in seen:
             seen.add(key)
             found.append((path, reason))
@@ -80,7 +96,7 @@ def discover(inputs: Sequence[Path], out_dir: Path, recursive: bool = False) -> 
         folder = item.resolve()
         skip = out_resolved if out_resolved != folder and _inside(out_resolved, folder) else None
         for path in _folder_files(item, recursive):
-            if skip is None or not _inside(path.resolve(), skip):
+            if skip is None or not _inside(_resolved(path), skip):
                 add(path)
     return found
 
@@ -90,7 +106,7 @@ def _folder_files(folder: Path, recursive: bool) -> Iterable[Path]:
     listed as failed with its reason instead of passed over in silence."""
     if not recursive:
         try:
-            names = sorted(e.name for e in os.scandir(folder) if not _is_hidden(e.name) and not e.is_dir())
+            names = sorted(e.name for e in os.scandir(folder) if not _is_hidden(e.name) and not _is_folder(e))
         except OSError:
             return []
         return [folder / n for n in names]

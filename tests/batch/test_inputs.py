@@ -63,3 +63,18 @@ def test_fifos_and_links_to_devices_in_a_folder_are_listed_not_skipped(tmp_path,
     errors = {p.name: sha256_of(p).error for p, _ in discover([tmp_path], tmp_path / "out", recursive)}
     assert errors["pipe.jpg"] == errors["zero.jpg"] == "is not a regular file"
     assert errors["broken.jpg"] == "no such file" and errors["a.jpg"] is None
+
+
+@pytest.mark.parametrize("recursive", [False, True])
+def test_links_that_loop_are_listed_as_failed_and_hide_no_other_photo(tmp_path, recursive):
+    # Following them fails (ELOOP) and resolving them raised: the whole folder
+    # used to be read as empty, or the batch stopped.
+    (tmp_path / "a.jpg").write_bytes(b"\xff\xd8")
+    (tmp_path / "loop1.jpg").symlink_to(tmp_path / "loop2.jpg")
+    (tmp_path / "loop2.jpg").symlink_to(tmp_path / "loop1.jpg")
+    found = discover([tmp_path], tmp_path / "out", recursive)
+    assert {p.name for p, _ in found} == {"a.jpg", "loop1.jpg", "loop2.jpg"}
+    errors = {p.name: sha256_of(p).error for p, _ in found}
+    assert errors["a.jpg"] is None
+    assert errors["loop1.jpg"].startswith("cannot read: ") and errors["loop2.jpg"].startswith("cannot read: ")
+    assert [p.name for p, _ in discover([tmp_path / "loop1.jpg"], tmp_path / "out")] == ["loop1.jpg"]
