@@ -587,14 +587,14 @@ def verify_command(folder, evidence, trust, verbose):
         for record in captured.records:
             click.echo(f"log: {record.name}: {record.getMessage()}", err=True)
     for line in result.passed:
-        click.echo(f"ok: {line}")
+        click.echo(f"ok: {visible(line)}")
     for note in result.notes:
-        click.echo(f"note: {note}")
+        click.echo(f"note: {visible(note)}")
     for problem in result.problems:
         _fail_line(problem.subject, problem.reason)
     if not result.ok:
         sys.exit(1)
-    click.echo(f"verified: {folder}")
+    click.echo(f"verified: {visible(str(folder))}")
 
 
 class _CapturedLogs(logging.Handler):

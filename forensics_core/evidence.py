@@ -28,7 +28,7 @@ from PIL import __version__ as _PILLOW_VERSION
 
 from . import exiftool
 from .defaults import DEFAULT_MAX_PIXELS
-from .text import visible
+from .text import decoded, visible
 from .findings import ContainedImage, EvidenceInfo, ExifSummary, GpsPosition, MetadataTag, RawTag
 from .thumbnail import MAX_PIXELS as _THUMBNAIL_MAX_PIXELS
 from .thumbnail import EmbeddedThumbnail, read_thumbnail
@@ -122,6 +122,12 @@ class Evidence:
         limits of :mod:`.thumbnail`, or the sentence saying why it cannot be
         read safely; None when the file names none. Consumers use this one
         and never parse ``data`` for it again.
+    source : Path or None
+        The file as it was read, for files beside it (a C2PA sidecar); None
+        for evidence made in memory, whose :attr:`path` is then
+        ``info.path``. ``info`` records the path as text
+        (:func:`~forensics_core.text.decoded`), which differs from it only
+        where the name holds bytes that are not UTF-8.
     """
 
     info: EvidenceInfo
@@ -129,10 +135,11 @@ class Evidence:
     pixels: np.ndarray
     max_pixels: int = 0
     thumbnail: EmbeddedThumbnail | None = None
+    source: Path | None = None
 
     @property
     def path(self) -> Path:
-        return Path(self.info.path)
+        return self.source if self.source is not None else Path(self.info.path)
 
     def decoding(self):
         """Context manager: Pillow decodes inside it under this evidence's pixel limit.
@@ -522,9 +529,10 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
         bad = int(pixels.size - np.isfinite(pixels).sum())
         notes.append(f"{bad:,} sample(s) of the stored grid are not finite numbers (NaN or infinite); the detectors "
                      f"read them as 0.")
+    source = p.resolve()
     info = EvidenceInfo(
-        path=str(p.resolve()),
-        name=p.name,
+        path=decoded(str(source)),
+        name=decoded(p.name),
         size=len(data),
         sha256=sha256,
         sha512=sha512,
@@ -543,4 +551,4 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
         metadata=metadata,
         metadata_reader=metadata_reader,
     )
-    return Evidence(info=info, data=data, pixels=pixels, max_pixels=max_pixels, thumbnail=thumbnail)
+    return Evidence(info=info, data=data, pixels=pixels, max_pixels=max_pixels, thumbnail=thumbnail, source=source)

@@ -20,6 +20,7 @@ from rich.text import Text
 
 from ..plugins import PluginHost
 from ..signing import ExaminerKey
+from ..text import decoded
 from .cluster import ClusterError, DaskPool
 from .inputs import discover, hash_all
 from .local import Finished, LocalPool
@@ -108,7 +109,7 @@ class _Batch:
 
     def __init__(self, plan: Plan, fail_line: FailLine):
         self.plan, self.fail_line = plan, fail_line
-        self.rows: dict[Path, Row] = {p.path: Row(str(p.path), p.sha256) for p in plan.photos}
+        self.rows: dict[Path, Row] = {p.path: Row(decoded(str(p.path)), p.sha256) for p in plan.photos}
         self.peaks: dict[str, float | None] = {"worker_mb": None, "detector_child_mb": None}
         self.n_failed = 0
 
@@ -137,7 +138,7 @@ class _Batch:
 
     def _from_folder(self, path: Path, folder: Path, outcome: str) -> None:
         row = self.rows[path]
-        row.output = str(folder)
+        row.output = decoded(str(folder))
         if fill_from_findings(row, folder):
             row.outcome = outcome
         else:
@@ -160,7 +161,7 @@ class _Batch:
             for path in entry.paths:
                 if path == primary:
                     continue
-                self.rows[path].duplicate_of = str(primary)
+                self.rows[path].duplicate_of = decoded(str(primary))
                 self._from_folder(path, self.plan.folder(entry), "duplicate")
                 settled += 1
         return settled
@@ -180,12 +181,12 @@ class _Batch:
             for entry in [group.primary, *group.others]:
                 for path in entry.paths:
                     if path != primary:
-                        self.rows[path].duplicate_of = str(primary)
-                        self.failed(path, f"same bytes as {primary}, which failed")
+                        self.rows[path].duplicate_of = decoded(str(primary))
+                        self.failed(path, f"same bytes as {decoded(str(primary))}, which failed")
             return sum(len(e.paths) for e in [group.primary, *group.others])
         for url in outcome.refused_urls:
             self.fail_line(job.folder, f"the PDF renderer was refused {url[:100]!r} (only data: URLs are allowed)")
-        row.outcome, row.output, row.verdict = "analysed", job.folder, outcome.verdict
+        row.outcome, row.output, row.verdict = "analysed", decoded(job.folder), outcome.verdict
         row.log10_lr = outcome.log10_lr
         row.detectors = {name: {"status": status, "score": score} for name, status, score in outcome.detectors}
         return 1 + self.settle_duplicates(job.sha256)

@@ -195,8 +195,13 @@ def _camera_rows(exif: ExifSummary) -> list[tuple[str, str]]:
     return [(k, v) for k, v in rows if v]
 
 
-def command_line(findings: Findings) -> str:
-    """The ``forensics analyze`` command that reproduces the recorded findings (to OUT), one option per line."""
+def command_line(findings: Findings, photo: Path) -> str:
+    """The ``forensics analyze`` command that reproduces the recorded findings (to OUT), one option per line.
+
+    ``photo`` is the evidence file as read: where its name holds bytes that
+    are not UTF-8, ``findings.evidence.path`` shows them as text and only
+    bash's ``$'...'`` escapes name the file itself.
+    """
     p = findings.parameters
     options: list[tuple[str, str]] = [
         ("--out", "OUT"), ("--format", "json"),
@@ -210,7 +215,7 @@ def command_line(findings: Findings) -> str:
     for det, params in sorted((p.get("detector_params") or {}).items()):
         for key, value in sorted(params.items()):
             options.append(("--param", f"{det}.{key}={json.dumps(value, separators=(',', ':'))}"))
-    lines = [f"forensics analyze {_shell_quote(findings.evidence.path)}"]
+    lines = [f"forensics analyze {_shell_quote(str(photo))}"]
     lines += [f"{flag} {_shell_quote(value)}" for flag, value in options]
     return " \\\n    ".join(lines)
 
@@ -404,7 +409,7 @@ def render_html(findings: Findings, evidence: Evidence, signature: SignatureInfo
         "report_packages": _report_packages(),
         "plugins": findings.plugins,
         "detectors": findings.detectors,
-        "command_line": command_line(findings),
+        "command_line": command_line(findings, evidence.path),
         "signature": signature,
         "raw_tags": ev.exif.raw,
         "metadata_groups": _metadata_groups(ev.metadata),

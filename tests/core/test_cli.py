@@ -121,6 +121,30 @@ def test_control_and_bidirectional_characters_in_names_are_shown_escaped(tmp_pat
     assert missing.returncode != 0 and "\x1b" not in missing.stderr and "gone\\x1b[2J.jpg" in missing.stderr
 
 
+def test_a_name_that_is_not_utf8_is_examined_reported_verified_and_listed(tmp_path, data_dir, validate):
+    # A Latin-1 name from an archive made on another system: a valid file name
+    # here, but its bytes are not text that JSON, HTML or PDF can hold.
+    folder = tmp_path / "in"
+    folder.mkdir()
+    photo = folder / os.fsdecode(b"caf\xe9.jpg")
+    photo.write_bytes((data_dir / "exif" / "Canon_40D.jpg").read_bytes())
+    out = run("analyze", photo, "--out", tmp_path / "out", "--format", "json,html,pdf", "--detectors", "metadata")
+    assert out.returncode == 0, out.stderr
+    assert "caf\\xe9.jpg: " in out.stdout
+    (bundle,) = (tmp_path / "out").iterdir()
+    findings = validate(json.loads((bundle / "findings.json").read_text(encoding="utf-8")))
+    assert findings["evidence"]["name"] == "caf\\xe9.jpg"
+    assert findings["evidence"]["path"].endswith("/in/caf\\xe9.jpg")
+    assert "/in/caf\\xe9.jpg&#39;" in (bundle / "report.html").read_text(encoding="utf-8")
+    verified = run("verify", bundle, "--evidence", photo)
+    assert verified.returncode == 0, verified.stderr
+    assert "evidence: caf\\xe9.jpg matches" in verified.stdout
+    batch = run("batch", folder, "--out", tmp_path / "batch", "--format", "json", "--detectors", "metadata")
+    assert batch.returncode == 0, batch.stderr
+    (row,) = json.loads((tmp_path / "batch" / "summary.json").read_text(encoding="utf-8"))["photos"]
+    assert row["outcome"] == "analysed" and row["photo"].endswith("/in/caf\\xe9.jpg")
+
+
 def test_names_and_fingerprints_are_printed_verbatim_not_as_emoji(tmp_path):
     # Rich would print ":cd:" as an emoji: a SHA-256 fingerprint holds ":CD:" one time in ten.
     missing = run("analyze", tmp_path / "gone:cd:smile:.jpg", "--out", tmp_path / "out")
