@@ -36,7 +36,7 @@ from .defaults import (
     PASSWORD_ENV,
 )
 from .plugins import PluginHost
-from .text import visible
+from .text import undecodable, visible
 from .validation.command import validate_command
 
 if TYPE_CHECKING:
@@ -73,6 +73,25 @@ def _strength_words(verdict: Verdict) -> str:
 
 def _fail_line(subject: str, reason: str) -> None:
     err_console.print(f"forensics: error: {visible(subject)}: {visible(reason)}", markup=False, soft_wrap=True)
+
+
+class _Text(click.ParamType):
+    """Words the user types that go into the findings, the report or a certificate.
+
+    An argument typed in another encoding than the terminal's holds bytes
+    that are not UTF-8, which none of those can hold: it is refused here, as
+    a usage error, rather than failing once the photo has been analysed.
+    """
+
+    name = "text"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and undecodable(value):
+            self.fail(f"{visible(value)} holds bytes that are not UTF-8 text; type it in UTF-8", param, ctx)
+        return value
+
+
+TEXT = _Text()
 
 
 def _parse_param(text: str) -> tuple[str, str, object]:
@@ -168,23 +187,23 @@ def _signing_key(key_path: Path | None, examiner: str | None, organisation: str 
 def _run_options(command):
     """The options ``analyze`` and ``batch`` share: what to run, how, and how to report it."""
     options = [
-        click.option("--detectors", help="Comma-separated detector names (default: all installed)."),
+        click.option("--detectors", type=TEXT, help="Comma-separated detector names (default: all installed)."),
         click.option("--format", "formats", default=",".join(FORMATS), show_default=True,
                      help=f"Comma-separated output formats: {', '.join(FORMATS)}. html and pdf also write the signed "
                           "manifest.json and manifest.json.p7s."),
-        click.option("--case-id", help="Case identifier carried into the findings."),
-        click.option("--examiner", help="Examiner's name carried into the findings."),
-        click.option("--param", "params", multiple=True, metavar="DETECTOR.KEY=VALUE",
+        click.option("--case-id", type=TEXT, help="Case identifier carried into the findings."),
+        click.option("--examiner", type=TEXT, help="Examiner's name carried into the findings."),
+        click.option("--param", "params", type=TEXT, multiple=True, metavar="DETECTOR.KEY=VALUE",
                      help="Override a detector parameter (repeatable); VALUE is read as JSON if it parses."),
         click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=DEFAULT_TIMEOUT_S,
                      show_default=True, help="Time limit per detector, seconds."),
         click.option("--max-pixels", type=click.IntRange(min=1), default=DEFAULT_MAX_PIXELS, show_default=True,
                      help="Refuse images with more pixels (decompression bombs)."),
-        click.option("--fusion", default="bonferroni", show_default=True, help="Fusion policy for the verdict."),
+        click.option("--fusion", type=TEXT, default="bonferroni", show_default=True, help="Fusion policy for the verdict."),
         click.option("--isolation", type=click.Choice(ISOLATIONS), default="process", show_default=True,
                      help="Run each detector in a child process (killable at the time limit) or inline."),
-        click.option("--exhibit-id", help="Exhibit identifier printed on every page of the report."),
-        click.option("--organisation",
+        click.option("--exhibit-id", type=TEXT, help="Exhibit identifier printed on every page of the report."),
+        click.option("--organisation", type=TEXT,
                      help="Examiner's organisation for the signature block (default: the certificate's)."),
         click.option("--key", "key_path", type=click.Path(dir_okay=False, exists=True, path_type=Path),
                      help=f"Signing key, PKCS#12 (password from ${PASSWORD_ENV} or a prompt). Default: the per-user "
@@ -452,8 +471,8 @@ def keys_group() -> None:
 
 
 @keys_group.command("create")
-@click.option("--name", required=True, help="Examiner's name (the certificate's common name).")
-@click.option("--org", "organisation", required=True, help="Organisation (the certificate's O).")
+@click.option("--name", type=TEXT, required=True, help="Examiner's name (the certificate's common name).")
+@click.option("--org", "organisation", type=TEXT, required=True, help="Organisation (the certificate's O).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               help="Folder for examiner.p12 and examiner.pem (default: the per-user configuration folder, "
                    "which makes it the default signing key).")

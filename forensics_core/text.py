@@ -32,6 +32,11 @@ def decoded(name: str) -> str:
     (lone surrogates, PEP 383) cannot be written as UTF-8 JSON, HTML or PDF.
     Any other name is returned unchanged.
     """
-    if not any(ord(c) in _ESCAPED_BYTES for c in name):
+    if not undecodable(name):
         return name
     return "".join(_escaped(c) if ord(c) in _ESCAPED_BYTES else c for c in name)
+
+
+def undecodable(text: str) -> bool:
+    """Whether ``text`` holds bytes that were not UTF-8 (a file name, an argument typed in another encoding)."""
+    return any(ord(c) in _ESCAPED_BYTES for c in text)

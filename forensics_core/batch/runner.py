@@ -20,7 +20,7 @@ from rich.text import Text
 
 from ..plugins import PluginHost
 from ..signing import ExaminerKey
-from ..text import decoded
+from ..text import decoded, visible
 from .cluster import ClusterError, DaskPool
 from .inputs import discover, hash_all
 from .local import Finished, LocalPool
@@ -289,8 +289,8 @@ def run_batch(request: BatchRequest, host: PluginHost, key: ExaminerKey | None, 
 def _run_record(request: BatchRequest, settings: Settings, pool: str, elapsed: float,
                 peaks: dict[str, float | None]) -> dict[str, Any]:
     return {
-        "inputs": [str(p) for p in request.inputs],
-        "out_dir": str(request.out_dir),
+        "inputs": [decoded(str(p)) for p in request.inputs],
+        "out_dir": decoded(str(request.out_dir)),
         "recursive": request.recursive,
         "force": request.force,
         "workers": pool,
@@ -333,4 +333,5 @@ def print_summary(result: BatchResult, console: Console) -> None:
     rate = f", {analysed / result.elapsed_s * 60:.1f} photos/min" if analysed and result.elapsed_s > 0 else ""
     console.print(f"{analysed} analysed in {result.elapsed_s:.1f} s{rate} ({result.pool})", markup=False,
                   highlight=False)
-    console.print(f"summary: {result.summary_csv}, {result.summary_json}", markup=False, highlight=False)
+    console.print(f"summary: {visible(str(result.summary_csv))}, {visible(str(result.summary_json))}", markup=False,
+                  highlight=False)

@@ -139,10 +139,21 @@ def test_a_name_that_is_not_utf8_is_examined_reported_verified_and_listed(tmp_pa
     verified = run("verify", bundle, "--evidence", photo)
     assert verified.returncode == 0, verified.stderr
     assert "evidence: caf\\xe9.jpg matches" in verified.stdout
-    batch = run("batch", folder, "--out", tmp_path / "batch", "--format", "json", "--detectors", "metadata")
+    results = tmp_path / os.fsdecode(b"r\xe9sultats")
+    batch = run("batch", folder, "--out", results, "--format", "json", "--detectors", "metadata")
     assert batch.returncode == 0, batch.stderr
-    (row,) = json.loads((tmp_path / "batch" / "summary.json").read_text(encoding="utf-8"))["photos"]
+    summary = json.loads((results / "summary.json").read_text(encoding="utf-8"))
+    assert summary["run"]["out_dir"].endswith("/r\\xe9sultats")
+    (row,) = summary["photos"]
     assert row["outcome"] == "analysed" and row["photo"].endswith("/in/caf\\xe9.jpg")
+
+
+def test_words_typed_in_another_encoding_are_a_usage_error_before_any_analysis(photo, tmp_path):
+    for option in ("--case-id", "--examiner", "--exhibit-id"):
+        out = run("analyze", photo, "--out", tmp_path / "out", option, os.fsdecode(b"Jos\xe9"))
+        assert out.returncode == 2 and "Traceback" not in out.stderr
+        assert f"Invalid value for '{option}': Jos\\xe9 holds bytes that are not UTF-8 text" in out.stderr
+    assert not (tmp_path / "out").exists()
 
 
 def test_names_and_fingerprints_are_printed_verbatim_not_as_emoji(tmp_path):
