@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import signal
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -627,17 +628,53 @@ class _CapturedLogs(logging.Handler):
         self.records.append(record)
 
 
+class _Terminated(BaseException):
+    """SIGTERM (a scheduler, ``timeout``, ``docker stop``), met as Ctrl-C is: what is running is stopped, what is
+    finished is kept (a batch writes its summary).
+
+    Python's default for SIGTERM ends the process at once: detector children
+    were left running. Not a ``KeyboardInterrupt``: CPython ends a process in
+    which one was raised inside ``exec`` (as dataclasses and plugins' imports
+    do) by SIGINT, whatever status it then exits with.
+    """
+
+
+def _terminate(signum, frame) -> None:
+    raise _Terminated()
+
+
 def main() -> None:
-    """Entry point of the ``forensics`` script: no traceback reaches the user."""
+    """Entry point of the ``forensics`` script: no traceback reaches the user.
+
+    Click's own handling (``standalone_mode``) would end an interrupted run
+    with "Aborted!" and status 1; a script must be able to tell it from a
+    photo that failed.
+    """
+    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _terminate)
+        # Forked detectors and workers are ended by their parent, which may
+        # use SIGTERM (multiprocessing does at exit): there it must end them.
+        os.register_at_fork(after_in_child=lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL))
     try:
-        cli.main(standalone_mode=True)
+        code = cli.main(standalone_mode=False)
     except SystemExit:
         raise
-    except KeyboardInterrupt:
-        _fail_line("interrupted", "stopped by the user")
-        sys.exit(130)
+    except click.ClickException as exc:
+        exc.show()
+        sys.exit(exc.exit_code)
+    except _Terminated:
+        _fail_line("terminated", "stopped by SIGTERM")
+        sys.exit(128 + signal.SIGTERM)
+    except (click.Abort, KeyboardInterrupt) as exc:
+        cause = exc if isinstance(exc, KeyboardInterrupt) else (exc.__cause__ or exc.__context__)
+        if isinstance(cause, KeyboardInterrupt):
+            _fail_line("interrupted", "stopped by the user")
+            sys.exit(130)
+        _fail_line("aborted", "no answer where the command asked for one")
+        sys.exit(1)
     except Exception as exc:
         if os.environ.get("FORENSICS_DEBUG"):
             raise
         _fail_line("internal error", f"{one_line(exc)} (set FORENSICS_DEBUG=1 for the traceback)")
         sys.exit(3)
+    sys.exit(code if isinstance(code, int) else 0)

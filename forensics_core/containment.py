@@ -8,16 +8,19 @@ unavailable, a daemon thread with a time limit is the fallback.
 
 from __future__ import annotations
 
+import ctypes
 import faulthandler
 import gc
 import multiprocessing
 import os
+import signal
 import sys
 import tempfile
 import threading
 import time
 import traceback
-from collections.abc import Callable, Collection
+from collections.abc import Callable, Collection, Iterator
+from contextlib import contextmanager
 from multiprocessing.connection import wait
 from typing import Any
 
@@ -42,9 +45,50 @@ def can_fork() -> bool:
 
 
 OUTPUT_LIMIT = 4000
+_PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 
 
-def _child(call: Callable[[], Any], conn, sink: int) -> None:
+HELD_SIGNALS = frozenset({signal.SIGINT, signal.SIGTERM})
+"""What :func:`signals_held` holds back while a process forks."""
+
+
+@contextmanager
+def signals_held() -> Iterator[None]:
+    """Fork inside this: Ctrl-C and SIGTERM wait until the fork is done.
+
+    Arriving during a fork, their exception is raised in an at-fork callback
+    (logging's lock), where Python prints it and drops it: the command went
+    on as if no one had asked it to stop. The child starts with them held
+    and releases them itself (``signal.pthread_sigmask(signal.SIG_UNBLOCK,
+    HELD_SIGNALS)``); a signal that came meanwhile is the parent's.
+    """
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, HELD_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def _die_with_parent(parent: int) -> None:
+    """Have the kernel end this child when the process that forked it ends (Linux; elsewhere nothing).
+
+    A parent killed outright (SIGKILL, the out-of-memory killer) cannot end
+    its children. They would then wait for ever: each holds, inherited, the
+    reading end of the others' result pipes, so a result larger than a pipe
+    holds never finishes being sent.
+    """
+    try:
+        prctl = ctypes.CDLL(None, use_errno=True).prctl
+    except (OSError, AttributeError):
+        return
+    prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent:  # it ended before the request was made
+        os._exit(1)
+
+
+def _child(call: Callable[[], Any], conn, sink: int, parent: int) -> None:
+    _die_with_parent(parent)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, HELD_SIGNALS)
     # A crash of the detector is reported in its finding; an inherited fault
     # handler would also dump the interpreter's state onto the user's terminal.
     faulthandler.disable()
@@ -87,13 +131,14 @@ class Child:
         sys.stdout.flush()
         sys.stderr.flush()
         self._sink = tempfile.TemporaryFile()
-        self._proc = ctx.Process(target=_child, args=(call, sender, self._sink.fileno()), daemon=True)
+        self._proc = ctx.Process(target=_child, args=(call, sender, self._sink.fileno(), os.getpid()), daemon=True)
         # The child's garbage collector would otherwise walk, and so copy, every
         # page of objects it shares with the parent; frozen, they are skipped
         # there, and the parent takes them back at once.
         gc.freeze()
         try:
-            self._proc.start()
+            with signals_held():
+                self._proc.start()
         except BaseException:
             self.receiver.close()
             self._sink.close()

@@ -23,6 +23,7 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from multiprocessing.connection import Connection, wait
 
+from ..containment import HELD_SIGNALS, signals_held
 from .plan import Job
 from .work import PhotoOutcome, Settings, process_photo
 
@@ -48,6 +49,7 @@ def _watch_lifeline(fd: int) -> None:
 
 
 def _worker_main(conn: Connection, lifeline_read: int, lifeline_write: int, settings: Settings) -> None:
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, HELD_SIGNALS)
     os.close(lifeline_write)
     # Its own group keeps the terminal's Ctrl-C for the command, which then
     # stops the workers itself; and lets the lifeline end detector children too.
@@ -78,7 +80,8 @@ class _Worker:
     def __init__(self, ctx, lifeline: tuple[int, int], settings: Settings):
         self.conn, child_conn = ctx.Pipe()
         self.proc = ctx.Process(target=_worker_main, args=(child_conn, *lifeline, settings), name="forensics-batch")
-        self.proc.start()
+        with signals_held():
+            self.proc.start()
         child_conn.close()
         # Set here too, so that the group exists whichever of the two runs first.
         try:

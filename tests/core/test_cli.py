@@ -3,8 +3,11 @@
 import hashlib
 import json
 import os
+import signal
 import subprocess
 import sys
+import time
+from pathlib import Path
 
 import numpy as np
 from PIL import Image
@@ -154,6 +157,45 @@ def test_words_typed_in_another_encoding_are_a_usage_error_before_any_analysis(p
         assert out.returncode == 2 and "Traceback" not in out.stderr
         assert f"Invalid value for '{option}': Jos\\xe9 holds bytes that are not UTF-8 text" in out.stderr
     assert not (tmp_path / "out").exists()
+
+
+def _children(pid: int) -> list[int]:
+    """The running processes forked by ``pid`` that run this project's code (zombies left out)."""
+    found = []
+    for entry in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            stat = Path(f"/proc/{entry}/stat").read_text()
+            command = Path(f"/proc/{entry}/cmdline").read_bytes()
+        except (FileNotFoundError, ProcessLookupError):
+            continue
+        state, ppid = stat.rsplit(")", 1)[1].split()[:2]
+        if int(ppid) == pid and state != "Z" and b"forensics_core" in command:
+            found.append(int(entry))
+    return found
+
+
+def test_sigterm_and_ctrl_c_stop_a_run_in_one_line_and_leave_no_detector_running(photo, tmp_path):
+    # SIGTERM (a scheduler, timeout, docker stop) used to end the command at
+    # once, its detector children left running; Ctrl-C ended as "Aborted!", 1.
+    for sig, status, words in ((signal.SIGTERM, 143, "forensics: error: terminated: stopped by SIGTERM"),
+                               (signal.SIGINT, 130, "forensics: error: interrupted: stopped by the user")):
+        out = tmp_path / sig.name
+        proc = subprocess.Popen([*FORENSICS, "analyze", str(photo), "--out", str(out), "--format", "json"],
+                                stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 60
+        while not _children(proc.pid):
+            assert proc.poll() is None and time.monotonic() < deadline, "no detector child started"
+            time.sleep(0.02)
+        started = _children(proc.pid)
+        proc.send_signal(sig)
+        stdout, stderr = proc.communicate(timeout=60)
+        # CPython ends a process by SIGINT when a KeyboardInterrupt was raised
+        # inside exec() (a plugin's import), whatever status it exits with.
+        assert proc.returncode in ((status, -signal.SIGINT) if sig == signal.SIGINT else (status,)), stderr
+        assert stderr.strip().splitlines() == [words] and stdout == ""
+        assert not set(started) & set(_children(1))
+        assert not list(out.rglob("manifest.json"))
 
 
 def test_names_and_fingerprints_are_printed_verbatim_not_as_emoji(tmp_path):
