@@ -94,6 +94,8 @@ def _label(text: str, where: str) -> bool:
 
 
 def _inside(root: Path, rel: str, where: str) -> Path:
+    if "\0" in rel:
+        raise SuiteError(f"{where}: {rel!r} holds a NUL byte, which no file name can")
     path = (root / rel).resolve()
     if not path.is_relative_to(root.resolve()):
         raise SuiteError(f"{where}: {rel!r} points outside the suite folder")
@@ -104,6 +106,15 @@ def _inside(root: Path, rel: str, where: str) -> Path:
 
 def read_truth_file(root: Path) -> list[Case]:
     """Cases listed in ``root/truth.csv`` (format in this module's docstring)."""
+    try:
+        return _truth_cases(root)
+    except UnicodeDecodeError:
+        raise SuiteError(f"{root / TRUTH_FILE}: not UTF-8 text") from None
+    except csv.Error as exc:
+        raise SuiteError(f"{root / TRUTH_FILE}: not readable as CSV ({exc})") from None
+
+
+def _truth_cases(root: Path) -> list[Case]:
     cases = []
     with open(root / TRUTH_FILE, newline="", encoding="utf-8") as fh:
         reader = csv.DictReader(fh)

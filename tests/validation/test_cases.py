@@ -51,11 +51,13 @@ def test_common_public_layout_with_masks_matched_by_stem(tmp_path):
     ("file,label\n../outside.png,spliced\n", "outside the suite folder"),
     ("file,label\nmissing.png,spliced\n", "no file 'missing.png'"),
     ("file,label\na.png,maybe\n", "neither spliced nor authentic"),
+    ("file,label\na\0.png,spliced\n", "line 2: 'a\\\\x00.png' holds a NUL byte"),
+    (b"file,label\na.png,authentic\ncaf\xe9.png,spliced\n", "truth.csv: not UTF-8 text"),
 ])
 def test_bad_truth_files_are_refused_with_the_line(tmp_path, truth, message):
     photo(tmp_path / "a.png")
     photo(tmp_path.parent / "outside.png")
-    (tmp_path / "truth.csv").write_text(truth)
+    (tmp_path / "truth.csv").write_bytes(truth if isinstance(truth, bytes) else truth.encode())
     with pytest.raises(SuiteError, match=message):
         folder_suite(tmp_path)
 
