@@ -10,6 +10,7 @@ from rich.console import Console
 from rich.table import Table
 
 from ..atomic import write_atomic
+from ..text import visible
 from .model import CalibrationError
 
 console = Console(stderr=True, highlight=False, emoji=False)
@@ -34,7 +35,7 @@ def calibrate_command(ctx, records, out_file, detectors):
     try:
         result = calibrate(records, names, calibrator_inputs(ctx.find_root().command.host))
     except CalibrationError as exc:
-        click.echo(f"forensics: {exc}", err=True)
+        click.echo(f"forensics: error: {visible(str(exc))}", err=True)
         sys.exit(2)
     write_atomic(out_file, result.to_json().encode("utf-8"))
     table = Table(title=f"log10 LR calibrators: {result.data['n_hp']} Hp, {result.data['n_hd']} Hd photos, "

@@ -170,8 +170,15 @@ def read_records(paths: Sequence[Path]) -> tuple[list[Case], list[dict[str, Any]
             record = json.loads(Path(path).read_text(encoding="utf-8"))
             datasets.append(dict(record["dataset"]))
             cases += cases_from_rows(record["cases"])
-        except (OSError, ValueError, KeyError, TypeError) as exc:
-            raise CalibrationError(f"cannot read validation record {path}: {exc}") from exc
+        except OSError as exc:
+            raise CalibrationError(f"cannot read validation record {path}: {exc.strerror or exc}") from exc
+        except UnicodeDecodeError as exc:
+            raise CalibrationError(f"{path}: not a validation record (not UTF-8 text)") from exc
+        except ValueError as exc:
+            raise CalibrationError(f"{path}: not a validation record (not JSON: {exc})") from exc
+        except (KeyError, TypeError) as exc:
+            missing = f"no {exc.args[0]!r} field" if isinstance(exc, KeyError) else "fields of the wrong kind"
+            raise CalibrationError(f"{path}: not a validation record of `forensics validate` ({missing})") from exc
     return cases, datasets
 
 

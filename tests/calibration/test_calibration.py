@@ -118,11 +118,18 @@ def test_cli_writes_a_loadable_file_and_prints_the_costs(tmp_path):
     assert set(loaded.calibrators) == {"strong", "noise", "shy"} and loaded.fusion is not None
 
 
-def test_cli_bad_record_is_one_line(tmp_path):
+@pytest.mark.parametrize("content, words", [
+    (b"{", "not a validation record (not JSON"),
+    (b"\xff\xfe", "not a validation record (not UTF-8 text)"),
+    (b'{"format": 1}', "not a validation record of `forensics validate` (no 'dataset' field)"),
+    (b"[]", "not a validation record of `forensics validate` (fields of the wrong kind)"),
+])
+def test_cli_bad_record_is_one_line(tmp_path, content, words):
     bad = tmp_path / "bad.json"
-    bad.write_text("{")
+    bad.write_bytes(content)
     result = CliRunner().invoke(cli, ["calibrate", str(bad), "--out", str(tmp_path / "c.json")])
     assert result.exit_code == 2 and len(result.output.strip().splitlines()) == 1
+    assert result.output.startswith(f"forensics: error: {bad}: {words}")
     with pytest.raises(CalibrationError):
         load(bad)
 
