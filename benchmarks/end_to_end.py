@@ -28,7 +28,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import statistics
 import subprocess
 import sys
@@ -37,7 +36,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from harness import OUT, ROOT, compile_sources
+from harness import OUT, ROOT, compile_sources, tree_env
 
 _CHILD = r"""
 import json, os, re, resource, sys, tempfile, time
@@ -98,10 +97,7 @@ def main() -> None:
 def _measure(label: str, tree: Path | None, sizes: list[float], args: argparse.Namespace) -> None:
     medians = []
     with tempfile.TemporaryDirectory() as home:
-        env = {**os.environ, "FORENSICS_HOME": home}
-        if tree is not None:
-            (Path(home) / "forensics_plugins").symlink_to(tree / "plugins")
-            env["PYTHONPATH"] = os.pathsep.join([str(tree), home])
+        env = {**tree_env(tree, Path(home)), "FORENSICS_HOME": home}
         for mp in sizes:
             target = photo(mp)
             runs = []

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -42,6 +43,23 @@ def compile_sources(tree: Path) -> str:
     subprocess.run([sys.executable, "-m", "compileall", "-q", str(tree / "forensics_core"), str(tree / "plugins")],
                    check=True, stdout=subprocess.DEVNULL)
     return f"bytecode of {tree} compiled, as a wheel install does"
+
+
+def tree_env(tree: Path | None, folder: Path) -> dict[str, str]:
+    """This process's environment, with ``tree``'s ``forensics_core`` and plugins first on the import path.
+
+    The installed entry points name the plugins' modules
+    (``forensics_plugins.*``): a link of that name in ``folder`` to
+    ``tree/plugins``, on the path after ``tree``, makes them resolve to that
+    tree. With ``tree`` None, the environment as it is (the installed tree).
+    """
+    env = dict(os.environ)
+    if tree is not None:
+        link = folder / "forensics_plugins"
+        if not link.exists():
+            link.symlink_to(tree / "plugins")
+        env["PYTHONPATH"] = os.pathsep.join([str(tree), str(folder)])
+    return env
 
 
 def parse_size(text: str) -> tuple[int, int]:

@@ -29,7 +29,7 @@ import tempfile
 from pathlib import Path
 
 from end_to_end import photo
-from harness import ROOT, compile_sources
+from harness import ROOT, compile_sources, tree_env
 
 _CHILD = r"""
 import json, os, sys, tempfile, time
@@ -76,10 +76,7 @@ _SERIAL = ("PDF layout", "PDF signature", "manifest signature")
 def _runs(target: Path, runs: int, tree: Path | None) -> list[dict[str, dict[str, float]]]:
     out = []
     with tempfile.TemporaryDirectory() as home:
-        env = {**os.environ, "FORENSICS_HOME": home}
-        if tree is not None:
-            (Path(home) / "forensics_plugins").symlink_to(tree / "plugins")
-            env["PYTHONPATH"] = os.pathsep.join([str(tree), home])
+        env = {**tree_env(tree, Path(home)), "FORENSICS_HOME": home}
         for _ in range(runs):
             done = subprocess.run([sys.executable, "-c", _CHILD, str(target)], capture_output=True, text=True,
                                   check=True, env=env, cwd=home)

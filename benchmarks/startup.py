@@ -16,7 +16,6 @@ tree), and printed beside.
 from __future__ import annotations
 
 import argparse
-import os
 import statistics
 import subprocess
 import sys
@@ -24,19 +23,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from harness import ROOT, compile_sources
+from harness import ROOT, compile_sources, tree_env
 
 COMMANDS = (("--version",), ("--help",), ("plugins",))
-
-
-def _env(tree: Path | None, shim: Path) -> dict[str, str]:
-    env = dict(os.environ)
-    if tree is not None:
-        link = shim / "forensics_plugins"
-        if not link.exists():
-            link.symlink_to(tree / "plugins")
-        env["PYTHONPATH"] = os.pathsep.join([str(tree), str(shim)])
-    return env
 
 
 def _time(args: tuple[str, ...], env: dict[str, str], cwd: Path) -> float:
@@ -59,7 +48,7 @@ def main() -> None:
         shim.mkdir()
         results: dict[tuple[str, tuple[str, ...]], list[float]] = {}
         for label, tree in trees:
-            env = {**_env(tree, shim), "FORENSICS_HOME": str(home)}
+            env = {**tree_env(tree, shim), "FORENSICS_HOME": str(home)}
             cwd = Path(tmp)
             for command in COMMANDS:
                 _time(command, env, cwd)  # warm the file cache
