@@ -1,4 +1,5 @@
-"""The copy_move figure: the photo with the matched keypoints, the identical windows and their sources.
+"""The copy_move figures: the photo with the matched keypoints, the identical windows and their sources; and the two
+regions side by side, enlarged.
 
 Drawn from the finding's ``details`` and the photo alone, so the report can be
 rebuilt from ``findings.json`` and the evidence; the photo is reduced first.
@@ -18,9 +19,16 @@ from forensics_core.report import figure_png
 from .spec import GRAIN
 
 MAX_SIDE = 1200
+# Side of each enlarged region: matched regions are often a few dozen pixels
+# across, too small on the page to tell an object from a printed pattern.
+REGION_SIDE = 480
 TARGET = (230, 40, 40)
 SOURCE = (40, 120, 255)
 LINK = (255, 210, 0)
+
+
+def _best(details: Mapping[str, Any]) -> dict[str, Any] | None:
+    return next((x for x in details.get("hypotheses") or [] if x["id"] == details.get("best")), None)
 
 
 def overlay_png(luma: np.ndarray, details: Mapping[str, Any]) -> bytes:
@@ -33,7 +41,7 @@ def overlay_png(luma: np.ndarray, details: Mapping[str, Any]) -> bytes:
         grey = cv2.resize(grey, (max(1, round(w * k)), max(1, round(h * k))), interpolation=cv2.INTER_AREA)
     img = Image.fromarray(grey.astype(np.uint8)).convert("RGB")
     draw = ImageDraw.Draw(img, "RGBA")
-    best = next((x for x in details.get("hypotheses") or [] if x["id"] == details.get("best")), None)
+    best = _best(details)
     if best is not None:
         back = cv2.invertAffineTransform(np.asarray(best["matrix_px"], dtype=np.float64))
         for x, y, size, _ in best["identical_windows_px"]:
@@ -50,3 +58,35 @@ def overlay_png(luma: np.ndarray, details: Mapping[str, Any]) -> bytes:
             draw.ellipse([tx * k - 2, ty * k - 2, tx * k + 2, ty * k + 2], outline=TARGET + (255,))
             draw.ellipse([sx * k - 2, sy * k - 2, sx * k + 2, sy * k + 2], outline=SOURCE + (255,))
     return figure_png(img)
+
+
+def regions_png(luma: np.ndarray, details: Mapping[str, Any]) -> bytes | None:
+    """PNG of the best candidate's two regions side by side, enlarged: left the target region (the box around its
+    identical windows), right the source region mapped onto it by the transform; None when no window is identical.
+
+    What the grain test cannot tell, printed or manufactured repetition (a mesh, wallpaper, two prints of one
+    picture) from a copy, the examiner often can from these two views.
+    """
+    best = _best(details)
+    if best is None or not best["identical_windows_px"]:
+        return None
+    windows = np.asarray(best["identical_windows_px"], dtype=np.float64)
+    margin = windows[0, 2]
+    h, w = luma.shape
+    x0, y0 = (max(0, int(v - margin)) for v in windows[:, :2].min(axis=0))
+    x1 = min(w, int((windows[:, 0] + windows[:, 2]).max() + margin))
+    y1 = min(h, int((windows[:, 1] + windows[:, 2]).max() + margin))
+    grey = np.clip(np.asarray(luma, dtype=np.float32), 0, 1) * 255
+    matrix = np.asarray(best["matrix_px"], dtype=np.float64).copy()
+    matrix[:, 2] -= (x0, y0)
+    source = cv2.warpAffine(grey, matrix, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR)
+    k = REGION_SIDE / max(x1 - x0, y1 - y0)
+    size = (max(1, round((x1 - x0) * k)), max(1, round((y1 - y0) * k)))
+    views = [cv2.resize(v, size, interpolation=cv2.INTER_NEAREST) for v in (grey[y0:y1, x0:x1], source)]
+    gap = 12
+    out = Image.new("RGB", (2 * size[0] + gap, size[1]), (255, 255, 255))
+    for i, (view, colour) in enumerate(zip(views, (TARGET, SOURCE))):
+        tile = Image.fromarray(view.astype(np.uint8)).convert("RGB")
+        ImageDraw.Draw(tile).rectangle([0, 0, size[0] - 1, size[1] - 1], outline=colour, width=3)
+        out.paste(tile, (i * (size[0] + gap), 0))
+    return figure_png(out)

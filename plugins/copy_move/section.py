@@ -8,7 +8,7 @@ from forensics_core import DetectorFinding, Evidence
 from forensics_core.report import Figure, ReportSection
 
 from .spec import GRAIN, REFERENCES
-from .figures import overlay_png
+from .figures import overlay_png, regions_png
 
 
 def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSection:
@@ -32,6 +32,14 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
             "grain peak with the other's is "
             f"{finding.parameters.get('identical_window_peak', 0.2)} or more; blue, where they come from under the transform. "
             "Which of the two is the copy cannot be told from the match alone.")
+        regions = regions_png(evidence.luma, d)
+        if regions is not None:
+            figures["regions"] = Figure(
+                regions, "image/png",
+                "The two regions of the best candidate, enlarged: left (red frame) the region whose windows share "
+                "their grain with the other's, right (blue frame) the other region mapped onto it by the transform. "
+                "A copy shows one object twice; a printed or manufactured pattern (a mesh, wallpaper, tiles, two "
+                "prints of one picture) shows as such, and the grain test cannot tell it from a copy.")
     context = {
         "n_keypoints": d.get("n_keypoints"), "n_matches": d.get("n_matches"),
         "n_dense": d.get("n_dense_candidates", 0),

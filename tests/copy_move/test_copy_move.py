@@ -117,7 +117,8 @@ def test_through_the_entry_point_with_its_report_section(tmp_path):
     body = str(section.body)
     for text in ("Candidate copies", "fine grain", "Strength and limits", "Amerini", "printed"):
         assert text in body, text
-    assert [f.key for f in section.figures] == ["overlay"] and section.figures[0].used
+    assert [f.key for f in section.figures] == ["overlay", "regions"] and all(f.used for f in section.figures)
+    assert "two regions of the best candidate, enlarged" in body
 
 
 def test_the_matches_number_of_false_alarms_falls_as_more_pairs_agree():
@@ -159,3 +160,14 @@ def test_the_grain_is_compared_the_way_the_copy_was_made(angle, factor):
     # Given the other way round, as keypoints may give it, the copy's own direction is found.
     best, found, _ = _aligned(gray, grain, made.reversed(), DEFAULT_PARAMS)
     assert best.scale == pytest.approx(factor, abs=0.02) and found.peak >= forward - 0.01
+
+
+def test_the_two_regions_are_drawn_only_where_windows_share_their_grain():
+    from forensics_plugins.copy_move.figures import REGION_SIDE, regions_png
+
+    rng = np.random.default_rng(12)
+    cloned, _ = clone(scene(rng, (480, 640)), rng, "translation")
+    result = analyse(_luma(encode(cloned, 90)), DEFAULT_PARAMS)
+    png = regions_png(_luma(encode(cloned, 90)), result.details)
+    assert png is not None and max(Image.open(io.BytesIO(png)).size) <= 2 * REGION_SIDE + 12
+    assert regions_png(np.zeros((64, 64)), {"hypotheses": [], "best": None}) is None
