@@ -651,7 +651,7 @@ def main() -> None:
     with "Aborted!" and status 1; a script must be able to tell it from a
     photo that failed.
     """
-    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL and hasattr(os, "register_at_fork"):
         signal.signal(signal.SIGTERM, _terminate)
         # Forked detectors and workers are ended by their parent, which may
         # use SIGTERM (multiprocessing does at exit): there it must end them.
