@@ -202,10 +202,15 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     return DetectorResult(status, summary, score=score, details=details)
 
 
+def best_hypothesis(details: Mapping[str, Any]) -> dict[str, Any] | None:
+    """The record of the finding's best candidate copy (``details["best"]``), or None."""
+    return next((h for h in details.get("hypotheses") or [] if h["id"] == details.get("best")), None)
+
+
 def regions_mask(details: Mapping[str, Any], shape: tuple[int, int]) -> np.ndarray:
     """Pixels of the best hypothesis' identical windows and of their sources, boolean, shape ``shape``."""
     mask = np.zeros(shape, np.uint8)
-    best = next((h for h in details.get("hypotheses") or [] if h["id"] == details.get("best")), None)
+    best = best_hypothesis(details)
     if best is None:
         return mask.astype(bool)
     back = cv2.invertAffineTransform(np.asarray(best["matrix_px"], dtype=np.float64))

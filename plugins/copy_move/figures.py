@@ -16,6 +16,7 @@ from PIL import Image, ImageDraw
 
 from forensics_core.report import figure_png
 
+from .detector import best_hypothesis
 from .spec import GRAIN
 
 MAX_SIDE = 1200
@@ -25,10 +26,6 @@ REGION_SIDE = 480
 TARGET = (230, 40, 40)
 SOURCE = (40, 120, 255)
 LINK = (255, 210, 0)
-
-
-def _best(details: Mapping[str, Any]) -> dict[str, Any] | None:
-    return next((x for x in details.get("hypotheses") or [] if x["id"] == details.get("best")), None)
 
 
 def overlay_png(luma: np.ndarray, details: Mapping[str, Any]) -> bytes:
@@ -41,7 +38,7 @@ def overlay_png(luma: np.ndarray, details: Mapping[str, Any]) -> bytes:
         grey = cv2.resize(grey, (max(1, round(w * k)), max(1, round(h * k))), interpolation=cv2.INTER_AREA)
     img = Image.fromarray(grey.astype(np.uint8)).convert("RGB")
     draw = ImageDraw.Draw(img, "RGBA")
-    best = _best(details)
+    best = best_hypothesis(details)
     if best is not None:
         back = cv2.invertAffineTransform(np.asarray(best["matrix_px"], dtype=np.float64))
         for x, y, size, _ in best["identical_windows_px"]:
@@ -67,7 +64,7 @@ def regions_png(luma: np.ndarray, details: Mapping[str, Any]) -> bytes | None:
     What the grain test cannot tell, printed or manufactured repetition (a mesh, wallpaper, two prints of one
     picture) from a copy, the examiner often can from these two views.
     """
-    best = _best(details)
+    best = best_hypothesis(details)
     if best is None or not best["identical_windows_px"]:
         return None
     windows = np.asarray(best["identical_windows_px"], dtype=np.float64)
