@@ -368,6 +368,7 @@ def analyze(ctx, photos, out_dir, force, jobs, **run):
                 failures += 1
                 _fail_line(str(photo), f"internal error: {one_line(exc)} (set FORENSICS_DEBUG=1 for the traceback)")
             else:
+                used.add(done.folder.name)
                 for url in done.refused_urls:
                     _fail_line(str(done.folder), f"the PDF renderer was refused {url[:100]!r} (only data: URLs are allowed)")
                 if done.findings.evidence.changed_during_analysis:

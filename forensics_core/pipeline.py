@@ -5,7 +5,6 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
-import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -15,7 +14,7 @@ from .analysis import Options, analyze_evidence
 from .evidence import Evidence, load_evidence
 from .findings import Findings
 from .manifest import FINDINGS_NAME, HTML_NAME, MANIFEST_NAME, PDF_NAME
-from .output import Placement, write_findings
+from .output import Placement, publish, staging_folder, write_findings
 from .plugins import PluginHost, one_line
 
 if TYPE_CHECKING:
@@ -138,24 +137,24 @@ def examine_photo(photo: Path, place: Callable[[Evidence, Findings], Placement],
     findings = analyze_evidence(evidence, host, options)
     findings.evidence.changed_during_analysis = _changed_since(photo, evidence.info.sha256)
     placement = place(evidence, findings)
-    folder = placement.folder
     if placement.action == "kept":
-        return Examined(findings, folder, folder / FINDINGS_NAME, kept=True)
-    if placement.action == "replace":
-        # The new bundle is made whole beside the old one, then swapped in,
-        # so an interruption leaves one complete bundle, never a mixture.
-        folder = Path(tempfile.mkdtemp(prefix=f".{placement.folder.name}.new-", dir=placement.folder.parent))
+        return Examined(findings, placement.folder, placement.folder / FINDINGS_NAME, kept=True)
+    if placement.action == "in_place":
+        path = write_findings(findings, placement.folder)
+        refused = write_report(findings, evidence, placement.folder, host, report) if report is not None else []
+        return Examined(findings, placement.folder, path, refused)
+    # The bundle is made whole beside its folder, then renamed into place, so
+    # an interruption leaves the folder as it was, never half a bundle or a
+    # mixture of two.
+    staging = staging_folder(placement.folder)
     try:
-        path = write_findings(findings, folder)
-        refused = write_report(findings, evidence, folder, host, report) if report is not None else []
+        write_findings(findings, staging)
+        refused = write_report(findings, evidence, staging, host, report) if report is not None else []
+        placement = publish(staging, placement, lambda: place(evidence, findings))
     except BaseException:
-        if placement.action == "replace":
-            shutil.rmtree(folder, ignore_errors=True)
+        shutil.rmtree(staging, ignore_errors=True)
         raise
-    if placement.action == "replace":
-        old = Path(tempfile.mkdtemp(prefix=f".{placement.folder.name}.old-", dir=placement.folder.parent))
-        placement.folder.rename(old / "bundle")
-        folder.rename(placement.folder)
-        shutil.rmtree(old, ignore_errors=True)
-        path = placement.folder / FINDINGS_NAME
-    return Examined(findings, placement.folder, path, refused)
+    if placement.action == "kept":
+        shutil.rmtree(staging, ignore_errors=True)
+        return Examined(findings, placement.folder, placement.folder / FINDINGS_NAME, kept=True)
+    return Examined(findings, placement.folder, placement.folder / FINDINGS_NAME, refused)

@@ -150,7 +150,7 @@ def process_photo(job: Job, settings: Settings) -> PhotoOutcome:
             raise EvidenceError("changed while the batch ran (its SHA-256 is not the one taken at the start)")
         folder.mkdir(parents=True, exist_ok=True)
         start_fresh(folder)
-        return Placement(folder)
+        return Placement(folder, "in_place")
 
     done = None
     error: str | None = None

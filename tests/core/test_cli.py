@@ -230,6 +230,46 @@ def test_analyze_never_writes_into_another_photos_or_other_settings_bundle(tmp_p
     assert not [p for p in out.iterdir() if p.name.startswith(".")], "staging folders left behind"
 
 
+def test_two_runs_of_one_photo_started_together_keep_one_whole_bundle(tmp_path, data_dir):
+    # Both runs used to take the empty <stem> folder: the second wrote over
+    # the first's finished bundle, file by file, and could leave a mixture.
+    from forensics_core.signing import default_key
+
+    default_key()  # made here once, so that the two runs race for the output folder only
+    photo = tmp_path / "photo.jpg"
+    photo.write_bytes((data_dir / "exif" / "Canon_40D.jpg").read_bytes())
+    for attempt in range(3):
+        out = tmp_path / f"out{attempt}"
+        command = [*FORENSICS, "analyze", str(photo), "--out", str(out), "--detectors", "metadata", "--format", "html"]
+        runs = [subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for _ in range(2)]
+        results = [(proc.communicate(timeout=300), proc.returncode) for proc in runs]
+        assert all(status == 0 for _, status in results), [stderr for (_, stderr), _ in results]
+        lines = sorted((stdout for (stdout, _), _ in results), key=lambda line: "(kept:" in line)
+        assert "(kept:" not in lines[0] and "(kept: already analysed with these settings" in lines[1], lines
+        assert {line.rsplit(" -> ", 1)[1].strip() for line in lines} == {str(out / "photo" / "findings.json")}
+        assert os.listdir(out) == ["photo"], "a second bundle or a staging folder was left"
+        verified = run("verify", out / "photo", "--evidence", photo)
+        assert verified.returncode == 0, verified.stdout + verified.stderr
+
+
+def test_a_run_killed_while_writing_leaves_the_folder_free_for_the_next(tmp_path, data_dir):
+    photo = tmp_path / "photo.jpg"
+    photo.write_bytes((data_dir / "exif" / "Canon_40D.jpg").read_bytes())
+    out = tmp_path / "out"
+    args = ["analyze", photo, "--out", out, "--detectors", "metadata", "--format", "html,pdf", "--jobs", "1"]
+    proc = subprocess.Popen([*FORENSICS, *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 120
+    while not list(out.glob(".photo.*.tmp")):
+        assert proc.poll() is None and time.monotonic() < deadline, "the bundle was never seen being made"
+        time.sleep(0.005)
+    proc.kill()
+    proc.communicate(timeout=60)
+    assert not (out / "photo").exists(), "a bundle was published by a killed run"
+    again = run(*args)
+    assert again.returncode == 0 and "kept" not in again.stdout, again.stderr
+    assert run("verify", out / "photo", "--evidence", photo).returncode == 0
+
+
 def test_one_changed_byte_in_the_exif_header_is_an_observation_and_stops_nothing(tmp_path, data_dir):
     good = data_dir / "exif" / "Canon_40D.jpg"
     data = bytearray(good.read_bytes())
