@@ -11,6 +11,7 @@ import hashlib
 import io
 import json
 import os
+import stat
 import struct
 import sys
 import tempfile
@@ -448,9 +449,10 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
     Raises
     ------
     EvidenceError
-        With a one-line reason: missing path, a directory, an empty file,
-        bytes that are no image, an unsupported format, a truncated or corrupt
-        image, or too many pixels.
+        With a one-line reason: missing path, a path that cannot be read (a
+        link that loops, with the system's words), a directory, an empty
+        file, bytes that are no image, an unsupported format, a truncated or
+        corrupt image, or too many pixels.
 
     Examples
     --------
@@ -460,11 +462,17 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
     ('JPEG', (480, 640), '9621899098ad')
     """
     p = Path(path)
-    if not p.exists():
-        raise EvidenceError("no such file")
-    if p.is_dir():
+    try:
+        mode = p.stat().st_mode
+    except (FileNotFoundError, ValueError):  # ValueError: a name with a NUL byte, which no file has
+        raise EvidenceError("no such file") from None
+    except OSError as exc:
+        # A link that loops, a folder that may not be entered, a name too long:
+        # the file may well exist, so the reason is given as the system states it.
+        raise EvidenceError(f"cannot read: {exc.strerror or exc}") from None
+    if stat.S_ISDIR(mode):
         raise EvidenceError("is a directory, not a photo")
-    if not p.is_file():
+    if not stat.S_ISREG(mode):
         raise EvidenceError("is not a regular file")
     try:
         data = p.read_bytes()

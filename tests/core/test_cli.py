@@ -1,5 +1,6 @@
 """The command line as a user meets it: real processes, real files."""
 
+import errno
 import hashlib
 import json
 import os
@@ -66,6 +67,16 @@ def test_same_stem_twice_gets_distinct_folders(tmp_path, data_dir):
     out = run("analyze", a / "x.jpg", b / "x.jpg", "--out", tmp_path / "out", "--detectors", "none_at_all")
     assert out.returncode == 0, out.stderr
     assert len(list((tmp_path / "out").glob("x*/findings.json"))) == 2
+
+
+def test_a_link_that_loops_is_named_as_batch_names_it_not_as_missing(tmp_path):
+    (tmp_path / "a.jpg").symlink_to("b.jpg")
+    (tmp_path / "b.jpg").symlink_to("a.jpg")
+    line = f"forensics: error: {tmp_path / 'a.jpg'}: cannot read: {os.strerror(errno.ELOOP)}"
+    analysed = run("analyze", tmp_path / "a.jpg", "--out", tmp_path / "out", "--format", "json")
+    assert analysed.returncode == 1 and analysed.stderr.splitlines() == [line]
+    batch = run("batch", tmp_path / "a.jpg", "--out", tmp_path / "batch", "--format", "json")
+    assert batch.returncode == 1 and batch.stderr.strip().splitlines() == [line]
 
 
 def test_usage_errors_exit_2_without_traceback(photo, tmp_path):

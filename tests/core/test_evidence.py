@@ -1,6 +1,8 @@
 """Evidence intake on real camera files and on hostile input."""
 
+import errno
 import hashlib
+import os
 import struct
 import zlib
 
@@ -107,8 +109,11 @@ def bad_inputs(tmp_path, data_dir):
     Image.new("RGB", (8, 8)).save(tmp_path / "anim.gif")
     (tmp_path / "bomb.png").write_bytes(png_header_only(20000, 20000))
     (tmp_path / "adir").mkdir()
+    (tmp_path / "loop.jpg").symlink_to("loop2.jpg")
+    (tmp_path / "loop2.jpg").symlink_to("loop.jpg")
     return {
         "missing.jpg": "no such file",
+        "loop.jpg": f"cannot read: {os.strerror(errno.ELOOP)}",
         "adir": "is a directory",
         "empty.jpg": "empty file",
         "text.jpg": "not an image",
