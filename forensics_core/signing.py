@@ -15,7 +15,6 @@ certificate is self-signed.
 from __future__ import annotations
 
 import asyncio
-import os
 from dataclasses import dataclass
 from datetime import datetime, timedelta, timezone
 from io import BytesIO
@@ -28,7 +27,7 @@ from cryptography.hazmat.primitives.serialization import pkcs12
 from cryptography.x509.oid import NameOID
 
 from . import trust
-from .atomic import write_atomic
+from .atomic import write_atomic, write_new
 from .certificates import fingerprint, is_self_signed
 from .defaults import KEY_TYPES
 from .home import config_dir
@@ -40,6 +39,10 @@ _SIGNATURE_FIELD = "ExaminerCertification"
 
 class SigningError(Exception):
     """The key cannot be made, loaded or used; the message is one line for the user."""
+
+
+class KeyExistsError(SigningError):
+    """A new key was to be stored where a key already is."""
 
 
 @dataclass(frozen=True)
@@ -141,13 +144,22 @@ def create_self_signed(name: str, organisation: str, key_type: str = "ecdsa-p256
 
 
 def write_key_files(folder: Path, p12: bytes, cert: x509.Certificate, stem: str = DEFAULT_KEY_NAME) -> tuple[Path, Path]:
-    """Write ``stem.p12`` (mode 0600: it holds the private key) and ``stem.pem`` (the certificate)."""
+    """Write ``stem.p12`` (mode 0600: it holds the private key) and ``stem.pem`` (the certificate).
+
+    Raises
+    ------
+    KeyExistsError
+        When ``stem.p12`` exists, even if another process stored it a moment
+        ago; then nothing is written.
+    """
     folder.mkdir(parents=True, exist_ok=True)
     p12_path = folder / f"{stem}.p12"
-    if p12_path.exists():
-        raise SigningError(f"{p12_path} exists; refusing to overwrite a signing key")
-    write_atomic(p12_path, p12)
-    os.chmod(p12_path, 0o600)
+    try:
+        write_new(p12_path, p12)
+    except FileExistsError:
+        raise KeyExistsError(f"{p12_path} exists; refusing to overwrite a signing key") from None
+    # Only the process that stored the PKCS#12 gets here, so the certificate
+    # beside it is always that key's, never another process's.
     pem_path = write_atomic(folder / f"{stem}.pem", cert.public_bytes(serialization.Encoding.PEM))
     return p12_path, pem_path
 
@@ -188,24 +200,35 @@ def default_key(examiner: str | None = None, organisation: str | None = None,
     protected with one. The key is put into the trust store when it is made,
     and once more if the store does not exist yet (a key made before trust
     stores existed); a key the examiner later removed from the store stays out.
+    Of runs that start together on a fresh account, one makes the key and the
+    others sign with it.
     """
     path = default_key_path()
     if path.exists():
-        key = load_key(path, password)
-        if not trust.store_dir().exists():
-            _trust(key.cert)
-        return key
+        return _stored_default_key(path, password)
     # A login name ("root") is not an examiner's identity: a key made without
     # one says so, and reports signed with it say no examiner is named.
     name = examiner or UNNAMED_EXAMINER
     p12, cert = create_self_signed(name, organisation or "unspecified organisation (trial key)")
     try:
         write_key_files(path.parent, p12, cert)
+    except KeyExistsError:
+        # A run started at the same time stored its key first: that is the
+        # examiner's key now, and this run's would sign reports no key on
+        # disk can be matched with.
+        return _stored_default_key(path, password)
     except OSError as exc:
         raise SigningError(f"cannot store a new per-user key in {path.parent}: {exc.strerror or exc}") from None
     _trust(cert)
-    key = load_key(path, None)
-    return ExaminerKey(key.cert, key.pkcs12_data, None, key.source, created_now=True)
+    # The key this run stored and trusted, whatever the file holds by now.
+    return ExaminerKey(cert, p12, None, str(path), created_now=True)
+
+
+def _stored_default_key(path: Path, password: bytes | None) -> ExaminerKey:
+    key = load_key(path, password)
+    if not trust.store_dir().exists():
+        _trust(key.cert)
+    return key
 
 
 def _trust(cert: x509.Certificate) -> None:

@@ -21,7 +21,7 @@ from cryptography.hazmat.primitives.serialization import NoEncryption, pkcs12
 from forensics_core import signing, trust
 from forensics_core.manifest import MANIFEST_NAME, SIGNATURE_NAME
 from forensics_core.verify import verify_bundle
-from report_helpers import make_bundle, pdf_pages_text, run
+from report_helpers import FORENSICS, make_bundle, pdf_pages_text, run
 
 KINDS = ["findings.json", "report.html", "report.pdf", "sectioned-overlay.png", "sectioned-plot.svg", "signer.pem",
          MANIFEST_NAME, SIGNATURE_NAME]
@@ -203,6 +203,39 @@ def test_per_user_key_is_made_on_first_use_and_reused(tmp_path, data_dir, isolat
     assert fp[0] == fp[1]
     text = " ".join(" ".join(pdf_pages_text(tmp_path / "a" / "Canon_40D" / "report.pdf")).split())
     assert "This certificate is self-signed" in text and "CN=Dr. B" in text
+
+
+def test_runs_started_together_on_a_fresh_home_make_one_key_and_all_sign_with_it(tmp_path, data_dir, monkeypatch):
+    # Newsrooms start runs over folders of photos in parallel; on a fresh
+    # account they all reach first-use key creation at once. A few rounds,
+    # since each round is one chance for the processes to interleave.
+    photo = data_dir / "exif" / "Canon_40D.jpg"
+    runs = 4
+    for round_ in range(3):
+        home = tmp_path / f"home{round_}"
+        monkeypatch.setenv("FORENSICS_HOME", str(home))
+        outs = [tmp_path / f"out{round_}-{i}" for i in range(runs)]
+        analyses = [subprocess.Popen([*FORENSICS, "analyze", str(photo), "--out", str(out), "--detectors", "",
+                                      "--format", "html", "--isolation", "inline", "--jobs", "1"],
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                    for out in outs]
+        results = [p.communicate(timeout=120) for p in analyses]
+        assert [p.returncode for p in analyses] == [0] * runs, [stderr for _, stderr in results]
+        assert sum("made a self-signed examiner key" in stdout for stdout, _ in results) == 1
+
+        assert sorted(p.name for p in home.iterdir()) == ["examiner.p12", "examiner.pem", "trusted"]
+        assert (home / "examiner.p12").stat().st_mode & 0o077 == 0
+        key = signing.load_key(home / "examiner.p12", None)
+        assert (home / "examiner.pem").read_bytes() == key.cert_pem, "the certificate file is the key's own"
+        assert [t.fingerprint for t in trust.trusted()] == [key.fingerprint], "only the key in use is trusted"
+
+        checks = [subprocess.Popen([*FORENSICS, "verify", str(out / "Canon_40D")],
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for out in outs]
+        for out, check in zip(outs, checks):
+            stdout, stderr = check.communicate(timeout=120)
+            assert check.returncode == 0, stderr
+            assert f"SHA-256 {key.fingerprint}, trusted" in stdout, "the bundle was signed by the one key"
+            assert (out / "Canon_40D" / "signer.pem").read_bytes() == key.cert_pem
 
 
 def test_xdg_config_home_is_honoured(tmp_path, data_dir, monkeypatch):
