@@ -211,7 +211,7 @@ def test_runs_started_together_on_a_fresh_home_make_one_key_and_all_sign_with_it
     # since each round is one chance for the processes to interleave.
     photo = data_dir / "exif" / "Canon_40D.jpg"
     runs = 4
-    for round_ in range(3):
+    for round_ in range(2):
         home = tmp_path / f"home{round_}"
         monkeypatch.setenv("FORENSICS_HOME", str(home))
         outs = [tmp_path / f"out{round_}-{i}" for i in range(runs)]
