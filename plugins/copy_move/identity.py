@@ -46,10 +46,11 @@ copy-moves.
 
 Printed or manufactured repetition (two prints of one poster, identical
 products, wallpaper) shares its fine grain too where the camera's own noise
-is weak. The statistic is therefore not turned into a p-value: its strength
-is the likelihood ratio calibrated on real photos
-(:mod:`forensics_core.calibration`), whose authentic photos include real
-repetition.
+is weak. A pattern that goes on under the same transform is told from a copy
+by :mod:`.lattice`; the rest is not. The statistic is therefore not turned
+into a p-value: its strength is the likelihood ratio calibrated on real
+photos (:mod:`forensics_core.calibration`), whose authentic photos include
+real repetition.
 
 Why not a residual that keeps the sensor noise alone: an adaptive Wiener
 residual (the structure damped by the local signal-to-noise ratio), measured
@@ -72,13 +73,15 @@ References
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
 from scipy import ndimage
 
-from .transforms import Hypothesis
+from .transforms import Hypothesis, refine
 
 # Residual standard deviation (grey levels) below which a window holds no
 # grain to compare: JPEG leaves smooth areas with less than this.
@@ -217,3 +220,28 @@ def identity(gray: np.ndarray, grain: np.ndarray, hypothesis: Hypothesis, window
     rows, cols = np.nonzero(full)
     corners = np.column_stack((x0 + 1 + cols[grainy] * window, y0 + 1 + rows[grainy] * window, r, g))
     return Identity(float(np.median(r)), float(np.median(g)), corners, window)
+
+
+def best_alignment(gray: np.ndarray, grain: np.ndarray, h: Hypothesis,
+                   params: Mapping[str, Any]) -> tuple[Hypothesis, Identity | None, str]:
+    """The hypothesis, either way round, at the alignment (keypoints' or refined on intensities) where the grain
+    peak is highest.
+
+    Which region is the copy is unknown, and the comparison is not symmetric:
+    the source is resampled onto the target, so only warping the source onto
+    its copy repeats the resampling the copy went through. On the shared
+    MICC-F220 copy-moves the better of the two directions raised the grain
+    peak of rotated and scaled copies (median 0.41 to 0.44; above 0.3 on 101
+    of 110 copies instead of 84).
+    """
+    window, offset = int(params["window_px"]), float(params["min_distance_px"])
+    best, found, how = h, None, "keypoints"
+    for way in (h, h.reversed()):
+        refined = refine(gray, way, target_region(way, gray.shape, 0), float(params["refine_max_shift_px"]))
+        for candidate, aligned in ((way, "keypoints"), (refined, "intensities (ECC)")):
+            if candidate is None:
+                continue
+            again = identity(gray, grain, candidate, window, offset)
+            if again is not None and (found is None or again.peak > found.peak):
+                best, found, how = candidate, again, aligned
+    return best, found, how

@@ -21,6 +21,8 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
         "rotation": f"{h['rotation_deg']:.1f}°", "shift": "{:.0f}, {:.0f}".format(*h["translation_px"]),
         "identity": "–" if h["identity"] is None else f"{h['identity']:.2f}",
         "peak": "–" if h.get("grain_peak") is None else f"{h['grain_peak']:.2f}", "windows": h["n_windows"],
+        "lattice": "–" if h.get("net_peak") is None else f"{h['lattice_peak']:.2f}",
+        "net": "–" if h.get("net_peak") is None else f"{h['net_peak']:.2f}",
         "identical": len(h["identical_windows_px"]), "best": h["id"] == d.get("best"),
     } for h in d.get("hypotheses", [])]
     figures = {}

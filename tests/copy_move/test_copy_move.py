@@ -137,8 +137,7 @@ def test_the_grain_is_compared_the_way_the_copy_was_made(angle, factor):
     Measured on 4 scenes: a copy rotated by 20° has a grain peak of 0.36-0.39 compared from its source and
     0.20-0.25 the other way round; one shrunk to 0.8, 0.40-0.44 against 0.14-0.16.
     """
-    from forensics_plugins.copy_move.detector import _aligned
-    from forensics_plugins.copy_move.identity import identity, residual
+    from forensics_plugins.copy_move.identity import best_alignment, identity, residual
     from forensics_plugins.copy_move.transforms import Hypothesis
 
     img = scene(np.random.default_rng(0), (600, 800))
@@ -158,7 +157,7 @@ def test_the_grain_is_compared_the_way_the_copy_was_made(angle, factor):
     forward, backward = (identity(gray, grain, h, 16, 16.0).peak for h in (made, made.reversed()))
     assert forward > backward + 0.04
     # Given the other way round, as keypoints may give it, the copy's own direction is found.
-    best, found, _ = _aligned(gray, grain, made.reversed(), DEFAULT_PARAMS)
+    best, found, _ = best_alignment(gray, grain, made.reversed(), DEFAULT_PARAMS)
     assert best.scale == pytest.approx(factor, abs=0.02) and found.peak >= forward - 0.01
 
 
@@ -171,3 +170,35 @@ def test_the_two_regions_are_drawn_only_where_windows_share_their_grain():
     png = regions_png(_luma(encode(cloned, 90)), result.details)
     assert png is not None and max(Image.open(io.BytesIO(png)).size) <= 2 * REGION_SIDE + 12
     assert regions_png(np.zeros((64, 64)), {"hypotheses": [], "best": None}) is None
+
+
+def _points(x0, y0, side, step=12):
+    ys, xs = np.mgrid[y0:y0 + side:step, x0:x0 + side:step]
+    return np.column_stack([xs.ravel(), ys.ravel()]).astype(np.float64)
+
+
+def test_a_printed_pattern_shares_its_grain_as_a_copy_does_but_goes_on_so_its_net_peak_is_low():
+    """Wallpaper: one printed tile repeated, each instance the same print, under the camera's own noise."""
+    from forensics_plugins.copy_move.identity import best_alignment, residual
+    from forensics_plugins.copy_move.lattice import lattice_peak, lattice_peaks
+    from forensics_plugins.copy_move.transforms import Hypothesis
+
+    rng = np.random.default_rng(4)
+    period = (136, 104)
+    tile = 128 + 40 * cv2.GaussianBlur(rng.normal(0, 1, period[::-1]).astype(np.float32), (0, 0), 1.2)
+    paper = np.tile(tile, (600 // period[1] + 1, 800 // period[0] + 1))[:600, :800]
+    photo = cv2.GaussianBlur(paper, (0, 0), 0.7) + rng.normal(0, 1.5, paper.shape)
+    gray = np.asarray(Image.open(io.BytesIO(encode(photo, 92))), dtype=np.float32)
+    grain = residual(gray)
+    source = _points(300, 250, 90)
+    one_period = Hypothesis(np.array([[1.0, 0, period[0]], [0, 1.0, 0]]), source, source + (period[0], 0))
+    aligned, same, _ = best_alignment(gray, grain, one_period, DEFAULT_PARAMS)
+    beyond = lattice_peaks(gray, grain, aligned, DEFAULT_PARAMS)
+    assert same.peak > 0.3, "a print shares its fine grain"
+    assert all(p is not None and p > 0.3 for p in beyond) and same.peak - lattice_peak(beyond) < 0.1, beyond
+
+
+def test_a_copy_does_not_go_on_and_keeps_its_grain_peak_as_its_net_peak(results):
+    clones = [r for c, r in results if c.spliced and r.details["best"] is not None]
+    assert clones and all(r.details["lattice_peak"] < 0.05 for r in clones)
+    assert all(r.score == pytest.approx(max(0.0, r.details["net_peak"]), abs=1e-4) for r in clones)
