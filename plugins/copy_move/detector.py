@@ -5,8 +5,8 @@ The finding states no p-value: the net peak, the grain peak (:mod:`.identity`,
 how much sharper the two regions' grain correlates at their alignment than
 one pixel away) less the lattice peak (:mod:`.lattice`, what a pattern keeps
 one step further on), is a measured statistic, reported as the detector's
-``score``, whose strength is the likelihood ratio calibrated on real photos. Under the
-Bonferroni triage rule the detector is therefore advisory (it never drives
+``score``, whose strength is the likelihood ratio calibrated on real photos.
+Under the Bonferroni triage rule the detector is therefore advisory (it never drives
 the label on its own); under the likelihood-ratio policy its calibrated LR
 counts like any other detector's.
 """
@@ -60,6 +60,7 @@ def _record(i: int, h: Hypothesis, found: Identity | None, aligned: str,
         windows = [[round(x / scale, 1), round(y / scale, 1), round(size, 1), round(float(g), 3)]
                    for x, y, _, g in strong]
     full = _full_matrix(h, scale)
+    pattern = lattice_peak(beyond)
     return {
         "id": i,
         "found_by": found_by,
@@ -73,8 +74,8 @@ def _record(i: int, h: Hypothesis, found: Identity | None, aligned: str,
         "identity": None if found is None else round(found.median, 4),
         "grain_peak": None if found is None else round(found.peak, 4),
         "lattice_peaks": [None if p is None else round(p, 4) for p in beyond],
-        "lattice_peak": round(lattice_peak(beyond), 4),
-        "net_peak": None if found is None else round(found.peak - lattice_peak(beyond), 4),
+        "lattice_peak": round(pattern, 4),
+        "net_peak": None if found is None else round(found.peak - pattern, 4),
         "n_windows": 0 if found is None else int(len(found.windows)),
         "identical_windows_px": windows,
         "source_px": np.round(h.source[:limit] / scale, 1).tolist(),
@@ -103,10 +104,15 @@ def _summary(status: Status, n_keypoints: int, records: list[dict[str, Any]], be
            if best["found_by"] == KEYPOINTS else
            f"Two smooth areas whose grain repeats under a move ({shift}; found by the grain's autocorrelation)")
     lattice = best["lattice_peak"]
-    pattern = (f" The same transform one step further on repeats the grain too (lattice peak {lattice:.2f}), as a "
-               f"printed or manufactured pattern does and a copy does not; the net peak, {best['net_peak']:.2f}, is "
-               f"what the pattern does not explain." if lattice > 0 else
-               " One step further on, the same transform does not repeat the grain, as a pattern would.")
+    if lattice > 0:
+        pattern = (f" The same transform one step further on repeats the grain too (lattice peak {lattice:.2f}), as "
+                   f"a printed or manufactured pattern does and a copy does not; the net peak, "
+                   f"{best['net_peak']:.2f}, is what the pattern does not explain.")
+    elif any(p is not None for p in best["lattice_peaks"]):
+        pattern = " One step further on, the same transform does not repeat the grain, as a pattern's would."
+    else:
+        pattern = (" Whether the repetition goes on, as a pattern's would, could not be seen: one step further on "
+                   "leaves the photo or holds no grain.")
     return (f"{how} have fine grain correlating at a median of "
             f"{best['identity']:.2f} over {best['n_windows']} windows, and a grain peak of {peak:.2f}: one pixel "
             f"away, in the direction where it persists most, {away}. Noise shared by a copy falls with the grain "
@@ -129,8 +135,8 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     -------
     DetectorResult
         ``ok`` with ``score`` = the largest net peak (grain peak less
-        lattice peak) over the candidate copies (clipped to [0, 1]) and no p-value; ``ok`` with no score when
-        no candidate copy could be compared (the calibrated LR is then 1:
+        lattice peak) over the candidate copies (clipped to [0, 1]) and no
+        p-value; ``ok`` with no score when no candidate copy could be compared (the calibrated LR is then 1:
         finding no clone says nothing about a splice or a removal, which Hp
         covers as well); ``inconclusive`` with too few keypoints and no
         smooth area whose grain repeats.
