@@ -23,7 +23,7 @@ import click
 from rich.console import Console
 from rich.markup import escape
 
-from . import ENTRY_POINT_GROUP, __version__
+from . import ENTRY_POINT_GROUP, __version__, stopping
 from .calibration.command import calibrate_command
 from .containment import one_line
 from .defaults import (
@@ -348,6 +348,7 @@ def analyze(ctx, photos, out_dir, force, jobs, **run):
     with progress:
         task = progress.add_task("analysing", total=len(photos))
         for photo in photos:
+            stopping.check()
             progress.update(task, description=escape(f"analysing {visible(photo.name)}"))
             progress.refresh()
             try:
@@ -630,21 +631,6 @@ class _CapturedLogs(logging.Handler):
         self.records.append(record)
 
 
-class _Terminated(BaseException):
-    """SIGTERM (a scheduler, ``timeout``, ``docker stop``), met as Ctrl-C is: what is running is stopped, what is
-    finished is kept (a batch writes its summary).
-
-    Python's default for SIGTERM ends the process at once: detector children
-    were left running. Not a ``KeyboardInterrupt``: CPython ends a process in
-    which one was raised inside ``exec`` (as dataclasses and plugins' imports
-    do) by SIGINT, whatever status it then exits with.
-    """
-
-
-def _terminate(signum, frame) -> None:
-    raise _Terminated()
-
-
 def main() -> None:
     """Entry point of the ``forensics`` script: no traceback reaches the user.
 
@@ -652,19 +638,16 @@ def main() -> None:
     with "Aborted!" and status 1; a script must be able to tell it from a
     photo that failed.
     """
-    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL and hasattr(os, "register_at_fork"):
-        signal.signal(signal.SIGTERM, _terminate)
-        # Forked detectors and workers are ended by their parent, which may
-        # use SIGTERM (multiprocessing does at exit): there it must end them.
-        os.register_at_fork(after_in_child=lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL))
+    stopping.install()
     try:
         code = cli.main(standalone_mode=False)
+        stopping.check()
     except SystemExit:
         raise
     except click.ClickException as exc:
         exc.show()
         sys.exit(exc.exit_code)
-    except _Terminated:
+    except stopping.Terminated:
         _fail_line("terminated", "stopped by SIGTERM")
         sys.exit(128 + signal.SIGTERM)
     except (click.Abort, KeyboardInterrupt) as exc:

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from . import stopping
 from .analysis import Options, analyze_evidence
 from .evidence import Evidence, load_evidence
 from .findings import Findings
@@ -136,6 +137,7 @@ def examine_photo(photo: Path, place: Callable[[Evidence, Findings], Placement],
     evidence = load_evidence(photo, max_pixels=options.max_pixels)
     findings = analyze_evidence(evidence, host, options)
     findings.evidence.changed_during_analysis = _changed_since(photo, evidence.info.sha256)
+    stopping.check()
     placement = place(evidence, findings)
     if placement.action == "kept":
         return Examined(findings, placement.folder, placement.folder / FINDINGS_NAME, kept=True)
@@ -150,6 +152,7 @@ def examine_photo(photo: Path, place: Callable[[Evidence, Findings], Placement],
     try:
         write_findings(findings, staging)
         refused = write_report(findings, evidence, staging, host, report) if report is not None else []
+        stopping.check()
         placement = publish(staging, placement, lambda: place(evidence, findings))
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)

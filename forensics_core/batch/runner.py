@@ -18,6 +18,7 @@ from rich.progress import (BarColumn, MofNCompleteColumn, Progress, ProgressColu
 from rich.table import Table
 from rich.text import Text
 
+from .. import stopping
 from ..plugins import PluginHost
 from ..signing import ExaminerKey
 from ..text import decoded, visible
@@ -276,6 +277,7 @@ def run_batch(request: BatchRequest, host: PluginHost, key: ExaminerKey | None, 
                     for finished in pool.run(jobs, on_idle=progress.refresh):
                         progress.update(task, advance=batch.finish(finished), failed=batch.n_failed)
                         progress.refresh()
+                        stopping.check()
         except ClusterError as exc:
             raise BatchError(str(exc)) from None
         finally:
