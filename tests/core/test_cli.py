@@ -191,9 +191,11 @@ def test_sigterm_and_ctrl_c_stop_a_run_in_one_line_and_leave_no_detector_running
     for sig, status, words in ((signal.SIGTERM, 143, "forensics: error: terminated: stopped by SIGTERM"),
                                (signal.SIGINT, 130, "forensics: error: interrupted: stopped by the user")):
         out = tmp_path / sig.name
+        # Ctrl-C as in a terminal's foreground: a shell starts background jobs
+        # (as CI may run this suite) with SIGINT ignored, and so does the command.
         proc = subprocess.Popen([*FORENSICS, "analyze", str(photo), "--out", str(out), "--format", "json"],
-                                stdout=subprocess.PIPE,
-                                stderr=subprocess.PIPE, text=True)
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         deadline = time.monotonic() + 60
         while not _children(proc.pid):
             assert proc.poll() is None and time.monotonic() < deadline, "no detector child started"
