@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import errno
+import fcntl
 import json
 import os
 import secrets
 import shutil
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from .atomic import write_atomic
@@ -83,16 +85,26 @@ def place_outputs(out_dir: Path, photo: Path, findings: Findings, files: set[str
     raise OSError(f"no free output folder for {stem} in {out_dir}")
 
 
-def staging_folder(folder: Path) -> Path:
+@contextmanager
+def staging_folder(folder: Path) -> Iterator[Path]:
     """A new hidden folder beside ``folder``, ``.<name>.<8 hex>.tmp``, to make a bundle in before it is published.
 
     The name is the one :func:`forensics_core.batch.resume.is_temp_name`
-    recognises, so ``forensics batch`` removes those a killed run left.
+    recognises, so ``forensics batch`` removes those a killed run left. While
+    the block runs the folder is locked (``flock`` on the folder itself, which
+    ends with the process however it ends), and ``forensics batch`` into the
+    same output folder passes over it: an ``analyze`` under way there keeps
+    the folder it is writing in.
     """
     folder.parent.mkdir(parents=True, exist_ok=True)
     staging = folder.parent / f".{folder.name}.{secrets.token_hex(4)}.tmp"
     staging.mkdir()
-    return staging
+    fd = os.open(staging, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield staging
+    finally:
+        os.close(fd)
 
 
 def _swap(staging: Path, folder: Path) -> None:
@@ -102,19 +114,19 @@ def _swap(staging: Path, folder: Path) -> None:
     another run's bundle has taken the place meanwhile, the old one is left
     aside in a staging folder rather than deleted.
     """
-    aside = staging_folder(folder)
-    try:
-        os.rename(folder, aside / folder.name)
-    except OSError:
-        aside.rmdir()
-        raise
-    try:
-        os.rename(staging, folder)
-    except OSError:
-        os.rename(aside / folder.name, folder)
-        aside.rmdir()
-        raise
-    shutil.rmtree(aside, ignore_errors=True)
+    with staging_folder(folder) as aside:
+        try:
+            os.rename(folder, aside / folder.name)
+        except OSError:
+            aside.rmdir()
+            raise
+        try:
+            os.rename(staging, folder)
+        except OSError:
+            os.rename(aside / folder.name, folder)
+            aside.rmdir()
+            raise
+        shutil.rmtree(aside, ignore_errors=True)
 
 
 def publish(staging: Path, placement: Placement, place_again: Callable[[], Placement]) -> Placement:

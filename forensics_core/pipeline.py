@@ -148,16 +148,17 @@ def examine_photo(photo: Path, place: Callable[[Evidence, Findings], Placement],
     # The bundle is made whole beside its folder, then renamed into place, so
     # an interruption leaves the folder as it was, never half a bundle or a
     # mixture of two.
-    staging = staging_folder(placement.folder)
-    try:
-        write_findings(findings, staging)
-        refused = write_report(findings, evidence, staging, host, report) if report is not None else []
-        stopping.check()
-        placement = publish(staging, placement, lambda: place(evidence, findings))
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
+    with staging_folder(placement.folder) as staging:
+        try:
+            write_findings(findings, staging)
+            refused = write_report(findings, evidence, staging, host, report) if report is not None else []
+            stopping.check()
+            placement = publish(staging, placement, lambda: place(evidence, findings))
+        except BaseException:
+            shutil.rmtree(staging, ignore_errors=True)
+            raise
+        if placement.action == "kept":
+            shutil.rmtree(staging, ignore_errors=True)
     if placement.action == "kept":
-        shutil.rmtree(staging, ignore_errors=True)
         return Examined(findings, placement.folder, placement.folder / FINDINGS_NAME, kept=True)
     return Examined(findings, placement.folder, placement.folder / FINDINGS_NAME, refused)

@@ -162,8 +162,27 @@ def start_fresh(folder: Path) -> None:
         (folder / name).unlink(missing_ok=True)
 
 
+def _in_use(folder: Path) -> bool:
+    """True when another process holds ``folder`` locked: an ``analyze`` making a bundle in it
+    (:func:`forensics_core.output.staging_folder`)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    finally:
+        os.close(fd)
+    return False
+
+
 def remove_temp_files(folder: Path) -> int:
-    """Delete the temporary files (and folders) a killed run left directly in ``folder``; return how many."""
+    """Delete the temporary files (and folders) a killed run left directly in ``folder``; return how many.
+
+    A folder another process holds locked is in use, not left, and stays.
+    """
     try:
         entries = list(os.scandir(folder))
     except OSError:
@@ -174,6 +193,8 @@ def remove_temp_files(folder: Path) -> int:
             continue
         path = Path(entry.path)
         if entry.is_dir(follow_symlinks=False):
+            if _in_use(path):
+                continue
             shutil.rmtree(path, ignore_errors=True)
         else:
             path.unlink(missing_ok=True)
