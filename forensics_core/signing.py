@@ -15,6 +15,7 @@ certificate is self-signed.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 from dataclasses import dataclass
 from datetime import datetime, timedelta, timezone
 from io import BytesIO
@@ -228,6 +229,14 @@ def _stored_default_key(path: Path, password: bytes | None) -> ExaminerKey:
     key = load_key(path, password)
     if not trust.store_dir().exists():
         _trust(key.cert)
+    pem = path.with_suffix(".pem")
+    if not pem.exists():
+        # The run that made the key was stopped between storing it and
+        # writing its certificate beside it. The certificate is the key's
+        # own, so it is written again for the examiner to share; a folder
+        # that cannot take it must not stop the signing.
+        with contextlib.suppress(OSError):
+            write_atomic(pem, key.cert_pem)
     return key
 
 

@@ -17,7 +17,7 @@ import os
 import signal
 
 _received: list[int] = []
-_installed: list[bool] = []
+_installed = False
 
 
 class Terminated(BaseException):
@@ -55,9 +55,10 @@ def install() -> None:
     Only where the platform forks (``os.register_at_fork``), as the rest of
     containment assumes.
     """
+    global _installed
     if not hasattr(os, "register_at_fork") or _installed:
         return
-    _installed.append(True)
+    _installed = True
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         signal.signal(signal.SIGINT, _interrupt)
     if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:

@@ -14,6 +14,7 @@ import pytest
 from batch_helpers import DATA, fixture_env, popen, run, sha256, summary, temp_files, tiny_jpeg
 from forensics_core.batch.resume import OutputLock
 from forensics_core.verify import verify_bundle
+from processes import alive
 
 CALIBRATION = DATA / "calibration"
 
@@ -130,14 +131,6 @@ def _count_finished(out: Path) -> int:
     return len(list(out.glob("*/manifest.json.p7s")))
 
 
-def _alive(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/status").read_text()
-    except OSError:
-        return False
-    return "\nState:\tZ" not in state
-
-
 @pytest.mark.slow
 def test_a_run_killed_midway_loses_nothing_finished_and_the_rerun_completes_it(tmp_path):
     photos = tmp_path / "in"
@@ -157,9 +150,9 @@ def test_a_run_killed_midway_loses_nothing_finished_and_the_rerun_completes_it(t
     assert 2 <= _count_finished(out) < 6
     workers = {int(line.split()[1]) for line in log.read_text().splitlines()}
     deadline = time.monotonic() + 10
-    while any(_alive(pid) for pid in workers) and time.monotonic() < deadline:
+    while any(alive(pid) for pid in workers) and time.monotonic() < deadline:
         time.sleep(0.05)
-    assert not any(_alive(pid) for pid in workers)  # the lifeline took the workers down with the command
+    assert not any(alive(pid) for pid in workers)  # the lifeline took the workers down with the command
     finished = {p.parent.name: p.stat().st_mtime_ns for p in out.glob("*/manifest.json.p7s")}
     assert finished and not (out / "summary.json").exists()
     # What a kill in the middle of a write leaves (write_atomic's temporary name), in an unfinished folder.

@@ -3,12 +3,12 @@
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy  # noqa: F401  (loads the BLAS whose threads are limited)
 import pytest
 
 from forensics_core.containment import can_fork, run_forked
+from processes import alive
 
 
 def _threads():
@@ -21,15 +21,6 @@ def test_a_contained_call_runs_with_one_blas_thread():
     assert can_fork()
     (kind, threads), _ = run_forked(_threads, 30)
     assert kind == "value" and threads and set(threads) == {1}
-
-
-def _alive(pid: int) -> bool:
-    """Running, not merely waiting to be reaped (a zombie)."""
-    try:
-        status = Path(f"/proc/{pid}/status").read_text()
-    except FileNotFoundError:
-        return False
-    return "\nState:\tZ" not in status
 
 
 _STARTS_A_CHILD_THEN_WAITS = r"""
@@ -58,10 +49,10 @@ def test_a_contained_call_ends_with_the_process_that_started_it_even_when_that_i
         assert time.monotonic() < deadline and parent.poll() is None
         time.sleep(0.05)
     child = int(marker.read_text())
-    assert _alive(child)
+    assert alive(child)
     parent.kill()
     parent.wait()
     deadline = time.monotonic() + 10
-    while _alive(child) and time.monotonic() < deadline:
+    while alive(child) and time.monotonic() < deadline:
         time.sleep(0.05)
-    assert not _alive(child)
+    assert not alive(child)

@@ -205,6 +205,16 @@ def test_per_user_key_is_made_on_first_use_and_reused(tmp_path, data_dir, isolat
     assert "This certificate is self-signed" in text and "CN=Dr. B" in text
 
 
+def test_a_certificate_file_lost_with_a_stopped_first_run_is_written_again(isolated_home):
+    # The first run is stopped after storing the key, before the certificate
+    # beside it: the next run writes the key's own certificate there.
+    made = signing.default_key("Dr. B")
+    (isolated_home / "examiner.pem").unlink()
+    again = signing.default_key()
+    assert again.fingerprint == made.fingerprint
+    assert (isolated_home / "examiner.pem").read_bytes() == made.cert_pem
+
+
 def test_runs_started_together_on_a_fresh_home_make_one_key_and_all_sign_with_it(tmp_path, data_dir, monkeypatch):
     # Newsrooms start runs over folders of photos in parallel; on a fresh
     # account they all reach first-use key creation at once. A few rounds,
