@@ -32,6 +32,9 @@ from .transforms import Hypothesis, hypotheses
 # A dense move this close (pixels) to a keypoints' transform without rotation
 # or scaling is the same candidate, already compared.
 _SAME_MOVE_PX = 3.0
+# Scales differing, or a shear, by no more than this are a similarity's to
+# the two decimals a finding shows.
+_SIMILAR = 0.005
 
 
 def _full_matrix(h: Hypothesis, scale: float) -> list[list[float]]:
@@ -61,6 +64,7 @@ def _record(i: int, h: Hypothesis, found: Identity | None, aligned: str,
                    for x, y, _, g in strong]
     full = _full_matrix(h, scale)
     pattern = lattice_peak(beyond)
+    scale_x, scale_y, shear = h.stretch
     return {
         "id": i,
         "found_by": found_by,
@@ -68,6 +72,8 @@ def _record(i: int, h: Hypothesis, found: Identity | None, aligned: str,
         "matches_log10_nfa": round(h.log10_nfa, 1) if np.isfinite(h.log10_nfa) else None,
         "scale": round(h.scale, 4),
         "rotation_deg": round(h.rotation_deg, 2),
+        "scale_xy": [round(scale_x, 4), round(scale_y, 4)],
+        "shear": round(shear, 4),
         "translation_px": [round(full[0][2], 1), round(full[1][2], 1)],
         "matrix_px": full,
         "aligned_on": aligned,
@@ -81,6 +87,18 @@ def _record(i: int, h: Hypothesis, found: Identity | None, aligned: str,
         "source_px": np.round(h.source[:limit] / scale, 1).tolist(),
         "target_px": np.round(h.target[:limit] / scale, 1).tolist(),
     }
+
+
+def stretched(record: Mapping[str, Any]) -> bool:
+    """Whether a candidate's transform (a record of ``details["hypotheses"]``) departs from a similarity: its
+    scales along x and y differ, or it shears, by more than the rounding of the figures shown (0.005)."""
+    scale_x, scale_y = record.get("scale_xy") or (record["scale"], record["scale"])
+    return abs(scale_x - scale_y) > _SIMILAR or abs(record.get("shear") or 0.0) > _SIMILAR
+
+
+def _shown(value: float, digits: int) -> str:
+    """``value`` to ``digits`` decimals, without the minus sign of a value that rounds to 0."""
+    return f"{round(value, digits) + 0.0:.{digits}f}"
 
 
 def _summary(status: Status, n_keypoints: int, records: list[dict[str, Any]], best: dict[str, Any] | None,
@@ -98,11 +116,18 @@ def _summary(status: Status, n_keypoints: int, records: list[dict[str, Any]], be
     away = (f"that correlation falls by {peak:.2f} times as much as the grain's own" if peak > 0 else
             "that correlation does not fall below its value at the alignment")
     shift = f"shift {best['translation_px'][0]:.0f}, {best['translation_px'][1]:.0f} px"
-    how = (f"Regions related by a similarity transform (scale {best['scale']:.2f}, rotation "
-           f"{best['rotation_deg']:.0f}°, {shift}; {best['n_inliers']} matched keypoints, NFA "
-           f"10^{best['matches_log10_nfa']:.0f})"
-           if best["found_by"] == KEYPOINTS else
-           f"Two smooth areas whose grain repeats under a move ({shift}; found by the grain's autocorrelation)")
+    matched = (None if best["found_by"] != KEYPOINTS else
+               f"{best['n_inliers']} matched keypoints, NFA 10^{best['matches_log10_nfa']:.0f}")
+    if matched is None:
+        how = f"Two smooth areas whose grain repeats under a move ({shift}; found by the grain's autocorrelation)"
+    elif stretched(best):
+        (scale_x, scale_y), shear = best["scale_xy"], best["shear"]
+        how = (f"Regions related by an affine transform (scale {scale_x:.2f} along x and {scale_y:.2f} along y, "
+               f"shear {_shown(shear, 2)}, rotation {_shown(best['rotation_deg'], 0)}°, {shift}; found as a "
+               f"similarity by {matched}, then aligned on their intensities)")
+    else:
+        how = (f"Regions related by a similarity transform (scale {best['scale']:.2f}, rotation "
+               f"{_shown(best['rotation_deg'], 0)}°, {shift}; {matched})")
     lattice = best["lattice_peak"]
     if lattice > 0:
         pattern = (f" The same transform one step further on repeats the grain too (lattice peak {lattice:.2f}), as "

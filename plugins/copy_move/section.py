@@ -7,8 +7,16 @@ from importlib.resources import files
 from forensics_core import DetectorFinding, Evidence
 from forensics_core.report import Figure, ReportSection
 
+from .detector import stretched
 from .spec import GRAIN, REFERENCES
 from .figures import overlay_png, regions_png
+
+
+def _scale(record: dict) -> str:
+    """The scale cell: one scale for a similarity, along x and y for a stretched (affine) alignment."""
+    if stretched(record):
+        return "{:.3f} × {:.3f}".format(*record["scale_xy"])
+    return f"{record['scale']:.3f}"
 
 
 def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSection:
@@ -16,9 +24,10 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
     d = finding.details
     rows = [{
         "id": h["id"], "found_by": "grain" if h.get("found_by") == GRAIN else "keypoints",
-        "inliers": "–" if h["n_inliers"] is None else h["n_inliers"], "scale": f"{h['scale']:.3f}",
+        "inliers": "–" if h["n_inliers"] is None else h["n_inliers"], "scale": _scale(h),
         "nfa": "–" if h.get("matches_log10_nfa") is None else f"{h['matches_log10_nfa']:.0f}",
-        "rotation": f"{h['rotation_deg']:.1f}°", "shift": "{:.0f}, {:.0f}".format(*h["translation_px"]),
+        "rotation": f"{h['rotation_deg']:.1f}°" + (f", shear {h['shear']:.2f}" if stretched(h) else ""),
+        "shift": "{:.0f}, {:.0f}".format(*h["translation_px"]),
         "identity": "–" if h["identity"] is None else f"{h['identity']:.2f}",
         "peak": "–" if h.get("grain_peak") is None else f"{h['grain_peak']:.2f}", "windows": h["n_windows"],
         "lattice": "–" if h.get("net_peak") is None else f"{h['lattice_peak']:.2f}",

@@ -77,6 +77,17 @@ class Hypothesis:
     def rotation_deg(self) -> float:
         return float(np.degrees(np.arctan2(self.matrix[1, 0], self.matrix[0, 0])))
 
+    @property
+    def stretch(self) -> tuple[float, float, float]:
+        """``(scale_x, scale_y, shear)`` of ``matrix[:, :2] = R(rotation_deg) @ [[scale_x, shear * scale_y],
+        [0, scale_y]]``: equal scales and no shear for a similarity; the intensities' (affine) alignment
+        (:func:`refine`) may stretch the copy unevenly."""
+        a, b, c, d = self.matrix[0, 0], self.matrix[0, 1], self.matrix[1, 0], self.matrix[1, 1]
+        scale_x = float(np.hypot(a, c))
+        cos, sin = a / scale_x, c / scale_x
+        scale_y = float(d * cos - b * sin)
+        return scale_x, scale_y, float((b * cos + d * sin) / scale_y)
+
     def reversed(self) -> Hypothesis:
         """The same pairs read the other way round: ``source = inverse(matrix) @ (target, 1)``."""
         return Hypothesis(cv2.invertAffineTransform(self.matrix), self.target, self.source, self.log10_nfa)

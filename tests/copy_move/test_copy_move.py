@@ -202,3 +202,32 @@ def test_a_copy_does_not_go_on_and_keeps_its_grain_peak_as_its_net_peak(results)
     clones = [r for c, r in results if c.spliced and r.details["best"] is not None]
     assert clones and all(r.details["lattice_peak"] < 0.05 for r in clones)
     assert all(r.score == pytest.approx(max(0.0, r.details["net_peak"]), abs=1e-4) for r in clones)
+
+
+def test_a_transform_is_split_into_rotation_scales_along_x_and_y_and_shear():
+    from forensics_plugins.copy_move.transforms import Hypothesis
+
+    theta = np.radians(12.0)
+    rotation = np.array([[np.cos(theta), -np.sin(theta)], [np.sin(theta), np.cos(theta)]])
+    matrix = np.column_stack([rotation @ np.array([[1.2, 0.1 * 0.9], [0.0, 0.9]]), [30.0, -5.0]])
+    h = Hypothesis(matrix, np.zeros((0, 2)), np.zeros((0, 2)))
+    assert h.rotation_deg == pytest.approx(12.0) and h.stretch == pytest.approx((1.2, 0.9, 0.1))
+    similar = Hypothesis(cv2.getRotationMatrix2D((10.0, 20.0), 30.0, 0.8), np.zeros((0, 2)), np.zeros((0, 2)))
+    assert similar.stretch == pytest.approx((0.8, 0.8, 0.0), abs=1e-9)
+
+
+def test_a_copy_stretched_unevenly_is_described_as_the_affine_map_it_is():
+    """MICC-F220's copies are scaled by different factors along x and y; the finding states both, not one scale."""
+    img = scene(np.random.default_rng(0), (600, 800))
+    side, (sx, sy), (tx, ty), (ax, ay) = 200, (60, 300), (430, 60), (1.1, 0.95)
+    m = np.array([[ax, 0.0, tx - ax * sx], [0.0, ay, ty - ay * sy]])
+    moved = cv2.warpAffine(img.astype(np.float32), m, (800, 600), flags=cv2.INTER_LINEAR)
+    img[ty:ty + int(ay * side), tx:tx + int(ax * side)] = moved[ty:ty + int(ay * side), tx:tx + int(ax * side)]
+    r = analyse(_luma(encode(img, 95)), DEFAULT_PARAMS)
+    best = next(h for h in r.details["hypotheses"] if h["id"] == r.details["best"])
+    assert best["aligned_on"] == "intensities (ECC)" and best["grain_peak"] > 0.3
+    # Compared either way round: the copy's own map, or its inverse.
+    assert (best["scale_xy"] == pytest.approx([ax, ay], abs=0.01)
+            or best["scale_xy"] == pytest.approx([1 / ax, 1 / ay], abs=0.01))
+    assert "affine transform (scale 1.10 along x and 0.95 along y, shear 0.00" in r.summary or \
+        "affine transform (scale 0.91 along x and 1.05 along y, shear 0.00" in r.summary
