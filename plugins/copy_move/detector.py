@@ -96,6 +96,13 @@ def stretched(record: Mapping[str, Any]) -> bool:
     return abs(scale_x - scale_y) > _SIMILAR or abs(record.get("shear") or 0.0) > _SIMILAR
 
 
+def sheared(record: Mapping[str, Any]) -> str:
+    """``", shear k"`` for a candidate whose transform shears by more than the rounding of the figure shown, else
+    ``""``."""
+    shear = record.get("shear") or 0.0
+    return f", shear {_shown(shear, 2)}" if abs(shear) > _SIMILAR else ""
+
+
 def _shown(value: float, digits: int) -> str:
     """``value`` to ``digits`` decimals, without the minus sign of a value that rounds to 0."""
     return f"{round(value, digits) + 0.0:.{digits}f}"
@@ -121,10 +128,10 @@ def _summary(status: Status, n_keypoints: int, records: list[dict[str, Any]], be
     if matched is None:
         how = f"Two smooth areas whose grain repeats under a move ({shift}; found by the grain's autocorrelation)"
     elif stretched(best):
-        (scale_x, scale_y), shear = best["scale_xy"], best["shear"]
-        how = (f"Regions related by an affine transform (scale {scale_x:.2f} along x and {scale_y:.2f} along y, "
-               f"shear {_shown(shear, 2)}, rotation {_shown(best['rotation_deg'], 0)}°, {shift}; found as a "
-               f"similarity by {matched}, then aligned on their intensities)")
+        scale_x, scale_y = best["scale_xy"]
+        how = (f"Regions related by an affine transform (scale {scale_x:.2f} along x and {scale_y:.2f} along y"
+               f"{sheared(best)}, rotation {_shown(best['rotation_deg'], 0)}°, {shift}; found as a similarity by "
+               f"{matched}, then aligned on their intensities)")
     else:
         how = (f"Regions related by a similarity transform (scale {best['scale']:.2f}, rotation "
                f"{_shown(best['rotation_deg'], 0)}°, {shift}; {matched})")

@@ -7,7 +7,7 @@ from importlib.resources import files
 from forensics_core import DetectorFinding, Evidence
 from forensics_core.report import Figure, ReportSection
 
-from .detector import stretched
+from .detector import sheared, stretched
 from .spec import GRAIN, REFERENCES
 from .figures import overlay_png, regions_png
 
@@ -26,7 +26,7 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
         "id": h["id"], "found_by": "grain" if h.get("found_by") == GRAIN else "keypoints",
         "inliers": "–" if h["n_inliers"] is None else h["n_inliers"], "scale": _scale(h),
         "nfa": "–" if h.get("matches_log10_nfa") is None else f"{h['matches_log10_nfa']:.0f}",
-        "rotation": f"{h['rotation_deg']:.1f}°" + (f", shear {h['shear']:.2f}" if stretched(h) else ""),
+        "rotation": f"{h['rotation_deg']:.1f}°{sheared(h)}",
         "shift": "{:.0f}, {:.0f}".format(*h["translation_px"]),
         "identity": "–" if h["identity"] is None else f"{h['identity']:.2f}",
         "peak": "–" if h.get("grain_peak") is None else f"{h['grain_peak']:.2f}", "windows": h["n_windows"],
