@@ -231,3 +231,10 @@ def test_a_copy_stretched_unevenly_is_described_as_the_affine_map_it_is():
             or best["scale_xy"] == pytest.approx([1 / ax, 1 / ay], abs=0.01))
     assert "affine transform (scale 1.10 along x and 0.95 along y, rotation 0°" in r.summary or \
         "affine transform (scale 0.91 along x and 1.05 along y, rotation 0°" in r.summary
+
+
+def test_a_finding_made_before_scales_along_x_and_y_were_recorded_reads_as_a_similarity():
+    from forensics_plugins.copy_move.detector import sheared, stretched
+
+    earlier = {"scale": 0.93, "rotation_deg": 6.7}
+    assert not stretched(earlier) and sheared(earlier) == ""
