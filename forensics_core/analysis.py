@@ -19,6 +19,8 @@ from datetime import datetime, timezone
 from importlib.metadata import PackageNotFoundError, version
 from typing import Any
 
+from PIL import features
+
 from . import __version__
 from .evidence import Evidence, load_evidence
 from .findings import (
@@ -116,6 +118,10 @@ def environment() -> dict[str, Any]:
             packages[name] = version(name)
         except PackageNotFoundError:
             packages[name] = None
+    # The JPEG decoder fixes the pixels every detector reads: another version
+    # (a Pillow built against the system's library) may round the inverse DCT
+    # and the chroma upsampling differently.
+    packages["libjpeg-turbo"] = features.version("libjpeg_turbo")
     return {
         "python": platform.python_version(),
         "implementation": platform.python_implementation(),
