@@ -37,7 +37,7 @@ Measured on the shared real corpus (downscaled to 2 MP, each transform also
 aligned on the intensities, :func:`.transforms.refine`, and compared both
 ways round), the largest grain peak of a photo exceeded 0.2 on 6 of 217
 authentic photos (an IMD "original" whose ground was itself cloned, the
-branches of an artificial fir, a printed wallpaper twice, as one file is in
+branches of an artificial fir (or a clone of them), a printed wallpaper twice, as one file is in
 the set under two names, framed prints of one photo at two sizes, and a
 column of identical windows seen at two depths) and
 on 107 of 110 MICC-F220 copy-moves; compared one way only, on 4 and 99. The
