@@ -1,5 +1,5 @@
 """The copy_move figures: the photo with the matched keypoints, the identical windows and their sources; and the two
-regions side by side, enlarged.
+regions side by side, enlarged, with their difference.
 
 Drawn from the finding's ``details`` and the photo alone, so the report can be
 rebuilt from ``findings.json`` and the evidence; the photo is reduced first.
@@ -22,7 +22,12 @@ from .spec import GRAIN
 MAX_SIDE = 1200
 # Side of each enlarged region: matched regions are often a few dozen pixels
 # across, too small on the page to tell an object from a printed pattern.
-REGION_SIDE = 480
+REGION_SIDE = 400
+# The difference of the two regions is drawn around mid-grey at this gain
+# (grey levels), fixed so that figures of different photos read alike: the
+# compression noise a copy differs from its source by shows as a faint
+# grain, shading and detail that differ as shapes.
+DIFFERENCE_GAIN = 4.0
 TARGET = (230, 40, 40)
 SOURCE = (40, 120, 255)
 LINK = (255, 210, 0)
@@ -58,11 +63,14 @@ def overlay_png(luma: np.ndarray, details: Mapping[str, Any]) -> bytes:
 
 
 def regions_png(luma: np.ndarray, details: Mapping[str, Any]) -> bytes | None:
-    """PNG of the best candidate's two regions side by side, enlarged: left the target region (the box around its
-    identical windows), right the source region mapped onto it by the transform; None when no window is identical.
+    """PNG of the best candidate's two regions side by side, enlarged, and their difference: left the target region
+    (the box around its identical windows), middle the source region mapped onto it by the transform, right the
+    target less the mapped source, times :data:`DIFFERENCE_GAIN` around mid-grey; None when no window is identical.
 
     What the grain test cannot tell, printed or manufactured repetition (a mesh, wallpaper, two prints of one
-    picture) from a copy, the examiner often can from these two views.
+    picture) from a copy, the examiner often can from these views: a copy differs from its source by the
+    compression's noise alone, over an area the tool that made it leaves (a brush's blob, a pasted rectangle),
+    whereas two objects in the scene differ in shading, detail and what shows between their parts.
     """
     best = best_hypothesis(details)
     if best is None or not best["identical_windows_px"]:
@@ -79,10 +87,12 @@ def regions_png(luma: np.ndarray, details: Mapping[str, Any]) -> bytes | None:
     source = cv2.warpAffine(grey, matrix, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR)
     k = REGION_SIDE / max(x1 - x0, y1 - y0)
     size = (max(1, round((x1 - x0) * k)), max(1, round((y1 - y0) * k)))
-    views = [cv2.resize(v, size, interpolation=cv2.INTER_NEAREST) for v in (grey[y0:y1, x0:x1], source)]
+    target = grey[y0:y1, x0:x1]
+    difference = np.clip(128.0 + DIFFERENCE_GAIN * (target - source), 0, 255)
+    views = [cv2.resize(v, size, interpolation=cv2.INTER_NEAREST) for v in (target, source, difference)]
     gap = 12
-    out = Image.new("RGB", (2 * size[0] + gap, size[1]), (255, 255, 255))
-    for i, (view, colour) in enumerate(zip(views, (TARGET, SOURCE))):
+    out = Image.new("RGB", (3 * size[0] + 2 * gap, size[1]), (255, 255, 255))
+    for i, (view, colour) in enumerate(zip(views, (TARGET, SOURCE, (128, 128, 128)))):
         tile = Image.fromarray(view.astype(np.uint8)).convert("RGB")
         ImageDraw.Draw(tile).rectangle([0, 0, size[0] - 1, size[1] - 1], outline=colour, width=3)
         out.paste(tile, (i * (size[0] + gap), 0))

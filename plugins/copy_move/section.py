@@ -9,7 +9,7 @@ from forensics_core.report import Figure, ReportSection
 
 from .detector import sheared, stretched
 from .spec import GRAIN, REFERENCES
-from .figures import overlay_png, regions_png
+from .figures import DIFFERENCE_GAIN, overlay_png, regions_png
 
 
 def _scale(record: dict) -> str:
@@ -48,9 +48,12 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
             figures["regions"] = Figure(
                 regions, "image/png",
                 "The two regions of the best candidate, enlarged: left (red frame) the region whose windows share "
-                "their grain with the other's, right (blue frame) the other region mapped onto it by the transform. "
-                "A copy shows one object twice; a printed or manufactured pattern (a mesh, wallpaper, tiles, two "
-                "prints of one picture) shows as such, and the grain test cannot tell it from a copy.")
+                "their grain with the other's, middle (blue frame) the other region mapped onto it by the transform, "
+                f"right their difference ({DIFFERENCE_GAIN:.0f} times, mid-grey where they are equal). "
+                "A copy shows one object twice and differs from its source by the compression's faint grain alone, "
+                "over the area the copy covers; two objects in the scene differ in shading, detail and what shows "
+                "between their parts. A printed or manufactured pattern (a mesh, wallpaper, tiles, two prints of one "
+                "picture) shows as such, and the grain test cannot tell it from a copy.")
     context = {
         "n_keypoints": d.get("n_keypoints"), "n_matches": d.get("n_matches"),
         "n_dense": d.get("n_dense_candidates", 0),
