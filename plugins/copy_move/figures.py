@@ -23,10 +23,10 @@ MAX_SIDE = 1200
 # Side of each enlarged region: matched regions are often a few dozen pixels
 # across, too small on the page to tell an object from a printed pattern.
 REGION_SIDE = 400
-# The difference of the two regions is drawn around mid-grey at this gain
-# (grey levels), fixed so that figures of different photos read alike: the
-# compression noise a copy differs from its source by shows as a faint
-# grain, shading and detail that differ as shapes.
+# The difference of the two regions is drawn around mid-grey at this gain,
+# fixed so that figures of different photos read alike: the compression
+# noise a copy differs from its source by shows as a faint grain, shading
+# and detail that differ as shapes.
 DIFFERENCE_GAIN = 4.0
 TARGET = (230, 40, 40)
 SOURCE = (40, 120, 255)
