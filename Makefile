@@ -15,7 +15,7 @@ SYSTEM_PACKAGES := libpango-1.0-0 libpangoft2-1.0-0 libharfbuzz-subset0 fonts-de
 VALIDATION ?= out/validation
 REAL ?= ../shared/data/real
 
-.PHONY: demo test validate validate-real calibrate bench bytecode check-python system-packages clean
+.PHONY: demo test validate validate-real validate-lens-splices calibrate bench bytecode check-python system-packages clean
 
 demo: bytecode
 	$(PY) -m forensics_core analyze $(SAMPLES) --out $(OUT) --case-id DEMO-1 --exhibit-id 1
@@ -44,6 +44,15 @@ validate-real: $(if $(wildcard $(REAL)),bytecode)
 	$(PY) -m forensics_core validate "$(REAL)" --out $(OUT)/validation-real && \
 	cp $(OUT)/validation-real/validation.json forensics_core/validation/real.json && \
 	echo "shipped record: forensics_core/validation/real.json; page: $(OUT)/validation-real/validation.html"
+
+# The lens-distortion paper's three kinds of splice (another camera's piece, a
+# piece moved to another distance from the centre, a rescaled one) forged from
+# the real corpus's building photos into $(OUT)/validation-lens-splices/cases,
+# with a control per host; nothing is shipped. No corpus, nothing to build.
+validate-lens-splices: $(if $(wildcard $(REAL)),bytecode)
+	@if [ ! -d "$(REAL)" ]; then echo "the real corpus is absent ($(REAL)): no lens splices built"; exit 0; fi; \
+	$(PY) -m forensics_core validate lens-splices --corpus "$(REAL)" --out $(OUT)/validation-lens-splices && \
+	echo "page: $(OUT)/validation-lens-splices/validation.html; cases and recipes: $(OUT)/validation-lens-splices/cases/"
 
 # Likelihood-ratio calibrators fitted on the shipped real record (refresh it
 # first with validate-real); the same record gives the same calibrators.

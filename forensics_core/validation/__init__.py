@@ -17,6 +17,7 @@ _LAZY = {
     "Case": "cases", "Suite": "cases", "SuiteError": "cases", "folder_suite": "cases", "read_suite": "cases",
     "ValidationRecord": "record", "read_record": "record", "shipped_record": "record",
     "default_workers": "runner",
+    "LENS_SPLICES": "lens_splices", "lens_splices_suite": "lens_splices",
     "RECORD_NAME": "run", "SYNTHETIC": "run", "synthetic_suite": "run", "validate": "run",
 }
 

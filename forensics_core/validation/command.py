@@ -9,7 +9,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
 
-from ..defaults import DEFAULT_COUNT, DEFAULT_SEED, DEFAULT_TIMEOUT_S
+from ..defaults import DEFAULT_COUNT, DEFAULT_REAL_CORPUS, DEFAULT_SEED, DEFAULT_TIMEOUT_S
 
 console = Console(stderr=True, highlight=False, emoji=False)
 
@@ -18,21 +18,27 @@ console = Console(stderr=True, highlight=False, emoji=False)
 @click.argument("suites", nargs=-1, required=True)
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Output folder: validation.json, validation.html, findings/, thumbnails/ of the authentic photos "
-                   "convicted and, for the synthetic suite, cases/.")
+                   "convicted and, for the synthetic and lens-splices suites, cases/.")
 @click.option("--detectors", help="Comma-separated detector names (default: all installed).")
 @click.option("--workers", type=click.IntRange(min=1), default=None, help="Worker processes (default: number of cores).")
-@click.option("--seed", type=int, default=DEFAULT_SEED, show_default=True, help="Seed of the synthetic suite.")
+@click.option("--seed", type=int, default=DEFAULT_SEED, show_default=True,
+              help="Seed of the synthetic and lens-splices suites.")
 @click.option("--count", type=click.IntRange(min=1), default=DEFAULT_COUNT, show_default=True,
               help="Authentic and spliced photos per plugin in the synthetic suite.")
+@click.option("--corpus", type=click.Path(file_okay=False, path_type=Path), default=DEFAULT_REAL_CORPUS,
+              show_default=True, help="Real corpus the lens-splices suite is built from (only read).")
 @click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=DEFAULT_TIMEOUT_S, show_default=True,
               help="Time limit per detector and photo, seconds.")
 @click.option("--fusion", default="bonferroni", show_default=True, help="Fusion policy for the verdict.")
 @click.pass_context
-def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, timeout, fusion):
+def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, corpus, timeout, fusion):
     """Run the detectors over SUITES and write their known error rates in one record.
 
     SUITES is `synthetic` (every plugin's synthetic photos, generated from
-    --seed; nothing is downloaded) or one or more folders: a set (with a
+    --seed; nothing is downloaded), `lens-splices` (the lens-distortion
+    paper's three kinds of splice and controls, forged from the real
+    authentic building photos of --corpus with --seed into OUT/cases/) or
+    one or more folders: a set (with a
     truth.csv, or with authentic/ and tampered/ subfolders and masks) or a
     parent folder whose descendant folders with a truth.csv are the sets
     (see the README). Every photo gets the condition `set`.
@@ -43,7 +49,8 @@ def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, time
     photos (their empirical CDF and the photos it convicts).
     """
     from ..analysis import Options
-    from . import RECORD_NAME, SYNTHETIC, SuiteError, default_workers, read_suite, synthetic_suite, validate
+    from . import (LENS_SPLICES, RECORD_NAME, SYNTHETIC, SuiteError, default_workers, lens_splices_suite, read_suite,
+                   synthetic_suite, validate)
     from .record import VERDICT
 
     host = ctx.find_root().command.host
@@ -57,8 +64,10 @@ def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, time
     if unknown:
         raise click.BadParameter(f"not installed: {', '.join(unknown)}", param_hint="--detectors")
     synthetic = SYNTHETIC in suites
-    if synthetic and len(suites) > 1:
-        raise click.BadParameter(f"{SYNTHETIC} is measured on its own, not with folders", param_hint="SUITES")
+    built = synthetic or LENS_SPLICES in suites
+    if built and len(suites) > 1:
+        raise click.BadParameter(f"{SYNTHETIC} and {LENS_SPLICES} are each measured on their own, not with other "
+                                 "suites", param_hint="SUITES")
     try:
         if synthetic:
             with console.status(f"generating the synthetic suite (seed {seed}, {count} + {count} per plugin)"):
@@ -66,6 +75,9 @@ def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, time
                     host, out_dir / "cases", seed, count,
                     on_problem=lambda p: console.print(f"forensics: warning: plugin {p.plugin} could not generate "
                                                        f"synthetic cases: {p.reason}", markup=False))
+        elif built:
+            with console.status(f"building the {LENS_SPLICES} suite from {corpus} (seed {seed})"):
+                the_suite = lens_splices_suite(corpus, out_dir / "cases", seed)
         else:
             the_suite = read_suite([Path(s) for s in suites])
     except SuiteError as exc:
@@ -83,7 +95,7 @@ def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, time
             progress.update(task, advance=1, failed=failures)
 
         record = validate(the_suite, out_dir, host, options, workers or default_workers(), done,
-                          seed=seed if synthetic else None, count=count if synthetic else None)
+                          seed=seed if built else None, count=count if synthetic else None)
     table = Table(title=f"{record.dataset.name}: {record.dataset.n_spliced} spliced, {record.dataset.n_authentic} authentic")
     table.add_column("method", no_wrap=True)
     for col in ("AUC (95% CI)", "TPR @ FPR 5%", "TPR / FPR at its rule", "declined",

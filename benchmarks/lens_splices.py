@@ -1,0 +1,256 @@
+"""How the lens distortion detector does on real-photo splices: the ``lens-splices`` suite.
+
+Usage: ``python benchmarks/lens_splices.py [--suite /tmp/lens_splices] [--workers 2] [--out cases.json]
+[--module forensics_plugins.lens_distortion]``
+
+The suite (built by ``forensics validate lens-splices``, see
+:mod:`forensics_core.validation.lens_splices`) holds authentic building
+photos with a piece pasted from another camera's photo (``other_camera``),
+moved to another distance from the centre (``moved``) or rescaled
+(``rescaled``), and each host untouched (``control``), all saved alike. The
+detector (``analyse`` with its ``DEFAULT_PARAMS``) runs on each photo's luma
+and this prints, per kind and per kind and ``two_directions`` (whether the
+piece holds lines of two directions at least 30 degrees apart):
+
+* ``n`` and the share of cases where the detector ran (status ok);
+* the share with image-level p < 0.01;
+* the share with a candidate region (``details["region"]``, the one that
+  departs most from one lens), and the median and 90th percentile of its
+  log10 Bayes factor over the cases that have one; the detector gives no
+  number (None) where the region's lines run in one direction only, whose
+  bound is -inf, and it is counted as such (quantiles: ``method="lower"``,
+  an order statistic, which -inf cannot turn into NaN);
+* the share whose strongest region has a line inside the case's mask, i.e.
+  points at the pasted piece (over all cases of the row; blank for
+  controls, which have no mask).
+
+``--out`` saves every case's record (status, p-value, evidence, the region,
+informative lines, the global k1, which lines lie in the mask, the time
+``analyse`` took). ``--module`` names another copy of the plugin, a package
+with the same ``detector`` and ``spec`` modules, so that an older version can
+be run on the same suite, e.g. the committed one::
+
+    mkdir -p /tmp/baseplug/lens_base
+    for f in $(git ls-tree --name-only HEAD plugins/lens_distortion/ | grep '\\.py$'); do
+        git show HEAD:$f > /tmp/baseplug/lens_base/$(basename $f); done
+    PYTHONPATH=/tmp/baseplug python benchmarks/lens_splices.py --module lens_base --out base.json
+
+Without the suite folder it says how to build it and exits 0. The photos and
+masks are only read.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import importlib
+import json
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from PIL import Image
+
+DEFAULT_SUITE = Path("/tmp/lens_splices")
+DEFAULT_MODULE = "forensics_plugins.lens_distortion"
+TRUTH_FILE = "truth.csv"
+KINDS = ("other_camera", "moved", "rescaled", "control")
+P_CALLED = 0.01
+#: A line counts as inside the mask when at least this share of its points are.
+IN_MASK_SHARE = 0.5
+
+
+def cases(suite: Path) -> list[dict[str, str]]:
+    """The rows of the suite's ``truth.csv``, in its order.
+
+    Parameters
+    ----------
+    suite : Path
+        The suite folder.
+
+    Returns
+    -------
+    list of dict
+        One row per photo, keyed by the CSV header (``file``, ``mask``,
+        ``kind``, ``jpeg_quality``, ``resized``, ``two_directions``, ...).
+    """
+    with (suite / TRUTH_FILE).open(newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def lines_in_mask(lines: list[dict[str, Any]], ids: list[int], mask: np.ndarray) -> list[int]:
+    """The ids among ``ids`` of the lines that lie inside ``mask``.
+
+    Parameters
+    ----------
+    lines : list of dict
+        ``details["lines"]``; line ``i`` (id ``i + 1``) has ``points_px``, x and y in pixels.
+    ids : list of int
+        One-based line ids, as the detector reports them.
+    mask : ndarray of bool, shape (H, W)
+        The pasted piece.
+
+    Returns
+    -------
+    list of int
+        The ids of the lines with at least :data:`IN_MASK_SHARE` of their
+        points in the mask. A majority rather than any point, because a host
+        line running past the piece touches its border without being pasted.
+    """
+    h, w = mask.shape
+    inside = []
+    for i in ids:
+        pts = np.asarray(lines[i - 1]["points_px"], dtype=float)
+        x = np.clip(np.round(pts[:, 0]).astype(int), 0, w - 1)
+        y = np.clip(np.round(pts[:, 1]).astype(int), 0, h - 1)
+        if np.mean(mask[y, x]) >= IN_MASK_SHARE:
+            inside.append(i)
+    return inside
+
+
+def run_one(job: tuple[str, Path, dict[str, str]]) -> dict[str, Any]:
+    """Analyse one case of the suite and record what the summary and a later comparison need.
+
+    Parameters
+    ----------
+    job : tuple
+        The plugin package's module name, the suite folder and the case's
+        ``truth.csv`` row.
+
+    Returns
+    -------
+    dict
+        The case's record (JSON-ready); ``status`` is ``"error: ..."`` when
+        ``analyse`` raised.
+    """
+    from forensics_core.evidence import load_evidence
+
+    module, suite, row = job
+    detector = importlib.import_module(f"{module}.detector")
+    spec = importlib.import_module(f"{module}.spec")
+    record: dict[str, Any] = {
+        "file": row["file"], "kind": row["kind"], "two_directions": row["two_directions"] or None,
+        "jpeg_quality": int(row["jpeg_quality"]), "resized": row["resized"],
+    }
+    luma = load_evidence(suite / row["file"]).luma
+    t0 = time.perf_counter()
+    try:
+        result = detector.analyse(luma, spec.DEFAULT_PARAMS)
+    except Exception as exc:  # noqa: BLE001 - one failing photo must not lose the rest of a long run
+        return {**record, "status": f"error: {type(exc).__name__}: {exc}", "elapsed_s": time.perf_counter() - t0}
+    elapsed = time.perf_counter() - t0
+    details = result.details
+    lines = details.get("lines") or []
+    region = details.get("region")
+    model = details.get("global_model") or {}
+    record.update({
+        "status": result.status.value, "p_value": result.p_value, "evidence": details.get("evidence"),
+        "region": None if region is None else {
+            key: region.get(key)
+            for key in ("log10_bayes_factor", "alternative", "decided", "n_regions", "line_ids", "pasted_line_ids")
+        },
+        "n_lines": len(lines), "n_informative": sum(bool(ln.get("informative")) for ln in lines),
+        "flagged_line_ids": details.get("flagged_line_ids") or [],
+        "k1": model.get("k1"), "k1_stderr": model.get("k1_stderr"), "elapsed_s": elapsed,
+    })
+    if row["mask"]:
+        mask = np.asarray(Image.open(suite / row["mask"]).convert("L")) >= 128
+        region_in = lines_in_mask(lines, region["line_ids"], mask) if region else []
+        flagged_in = lines_in_mask(lines, record["flagged_line_ids"], mask)
+        record.update({"region_line_ids_in_mask": region_in, "flagged_line_ids_in_mask": flagged_in,
+                       "region_in_mask": bool(region_in), "flagged_in_mask": bool(flagged_in)})
+    return record
+
+
+def _share(values: list[bool]) -> str:
+    return f"{np.mean(values):6.0%}" if values else f"{'-':>6s}"
+
+
+def summary_line(label: str, rows: list[dict[str, Any]]) -> str:
+    """One line of the summary table over ``rows``.
+
+    Parameters
+    ----------
+    label : str
+        The row's name (kind, or kind and ``two_directions``).
+    rows : list of dict
+        Records of :func:`run_one`.
+
+    Returns
+    -------
+    str
+        n, the shares ok, with p < 0.01 and with a region, the region's log10
+        Bayes factor (median, 90th percentile) and the share whose region has
+        a line in the mask.
+    """
+    # None is the -inf bound of a one-direction region: no evidence, not a missing case.
+    bf = [-np.inf if r["region"]["log10_bayes_factor"] is None else r["region"]["log10_bayes_factor"]
+          for r in rows if r.get("region")]
+    masked = [r for r in rows if "region_in_mask" in r]
+    return (f"{label:26s} {len(rows):4d} {_share([r['status'] == 'ok' for r in rows])} "
+            f"{_share([r.get('p_value') is not None and r['p_value'] < P_CALLED for r in rows])} "
+            f"{_share([bool(r.get('region')) for r in rows])} "
+            + (" ".join(f"{np.percentile(bf, q, method='lower'):+9.2f}" for q in (50, 90)) if bf
+               else f"{'-':>9s} {'-':>9s}")
+            + f" {_share([r['region_in_mask'] for r in masked])}")
+
+
+def print_summary(records: list[dict[str, Any]]) -> None:
+    """Print the table per kind, then per kind and ``two_directions``.
+
+    Parameters
+    ----------
+    records : list of dict
+        Records of :func:`run_one`.
+    """
+    print(f"{'':26s} {'n':>4s} {'ok':>6s} {'p<.01':>6s} {'region':>6s} {'BF med':>9s} {'BF p90':>9s} {'inmask':>6s}")
+    for kind in KINDS:
+        rows = [r for r in records if r["kind"] == kind]
+        if rows:
+            print(summary_line(kind, rows))
+    print()
+    for kind in KINDS:
+        for two in ("no", "yes", None):
+            rows = [r for r in records if r["kind"] == kind and r["two_directions"] == two]
+            if rows:
+                print(summary_line(f"{kind}, two_dir {two or '-'}", rows))
+    errors = [r for r in records if r["status"].startswith("error")]
+    for r in errors:
+        print(f"  {r['file']}: {r['status']}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--suite", type=Path, default=DEFAULT_SUITE)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--out", type=Path, help="JSON file for the per-case records")
+    parser.add_argument("--module", default=DEFAULT_MODULE,
+                        help="package whose .detector.analyse and .spec.DEFAULT_PARAMS are run")
+    args = parser.parse_args()
+    if not (args.suite / TRUTH_FILE).exists():
+        print(f"suite absent ({args.suite}): build it with `forensics validate lens-splices` or "
+              f"forensics_core.validation.lens_splices")
+        sys.exit(0)
+    # Imported here too so that a wrong --module fails at once, not in every worker.
+    spec = importlib.import_module(f"{args.module}.spec")
+    importlib.import_module(f"{args.module}.detector")
+    rows = cases(args.suite)
+    t0 = time.perf_counter()
+    with ProcessPoolExecutor(args.workers) as pool:
+        records = list(pool.map(run_one, [(args.module, args.suite, row) for row in rows]))
+    wall = time.perf_counter() - t0
+    print(f"{args.module} ({spec.__file__}), version {getattr(spec, 'VERSION', '?')}: {len(records)} cases "
+          f"from {args.suite} in {wall:.0f} s on {args.workers} workers")
+    print_summary(records)
+    if args.out is not None:
+        args.out.write_text(json.dumps({"suite": str(args.suite), "module": args.module,
+                                        "module_file": spec.__file__, "version": getattr(spec, "VERSION", None),
+                                        "params": spec.DEFAULT_PARAMS, "wall_s": wall, "cases": records}, indent=1))
+        print(f"per-case records: {args.out}")
+
+
+if __name__ == "__main__":
+    main()
