@@ -34,7 +34,9 @@ class RadialDistortion:
         Radial coefficients, in normalised coordinates (image centre 0, half
         the larger side 1); k1 > 0 is barrel distortion.
     k1_stderr, k2_stderr : float
-        Their standard errors, model error included.
+        Their standard errors, model error included. ``k2 = 0`` with
+        ``k2_stderr = 0`` states a one-term model (the paper's), ``k2``
+        held at zero: compare ``k1`` with another source's one-term ``k1``.
     cx, cy, cx_stderr, cy_stderr : float
         Centre of distortion and its standard errors, normalised.
     cx_px, cy_px : float

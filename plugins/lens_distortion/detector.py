@@ -16,7 +16,7 @@ import numpy as np
 
 from forensics_core import RADIAL_DISTORTION_KEY, DetectorResult, RadialDistortion, Status
 
-from .consistency import ConsistencyResult, assess
+from .consistency import ConsistencyResult, GlobalModel, assess
 from .edges import subpixel_edges
 from .geometry import norm_scale, to_normalised
 from .k1 import k1_paper, signed_distance, trim_to_shortest
@@ -70,7 +70,8 @@ def _line_records(lines: list[DistortedLine], shape: tuple[int, int], result: Co
             "n_points": len(line.points),
             "pieces": line.pieces,
             "k1": _none_if_nan(joint.k1),
-            "k1_stderr": _none_if_nan(joint.k1_stderr),
+            "k1_stderr": _none_if_nan(result.line_k1_stderr[i]),
+            "k1_stderr_noise": _none_if_nan(joint.k1_stderr),
             "k1_paper": _none_if_nan(k1_paper(paper_input[i])),
             "residual_rms_px": _none_if_nan(joint.residual_rms_px),
             "k1_model": _none_if_nan(dep.k1),
@@ -85,15 +86,42 @@ def _line_records(lines: list[DistortedLine], shape: tuple[int, int], result: Co
 
 
 def _global_model(result: ConsistencyResult) -> dict[str, Any] | None:
+    """The photo's lens as published to other detectors: the one-term ``k1`` with the centre free."""
     m = result.model
     if m is None:
         return None
+    one = m.one_term
     return RadialDistortion(
-        k1=m.k1, k1_stderr=m.k1_stderr, k2=m.k2, k2_stderr=m.k2_stderr,
-        cx=m.cx, cx_stderr=m.cx_stderr, cy=m.cy, cy_stderr=m.cy_stderr,
-        cx_px=m.cx * m.scale_px, cy_px=m.cy * m.scale_px, sigma_px=m.sigma_px,
+        k1=one.k1, k1_stderr=one.k1_stderr, k2=0.0, k2_stderr=0.0,
+        cx=one.cx, cx_stderr=one.cx_stderr, cy=one.cy, cy_stderr=one.cy_stderr,
+        cx_px=one.cx * m.scale_px, cy_px=one.cy * m.scale_px, sigma_px=m.sigma_px,
         n_lines_explained=m.n_lines_explained, n_lines_informative=m.n_lines_informative,
     ).to_details()
+
+
+def _distortion(result: ConsistencyResult) -> dict[str, Any] | None:
+    """Both fits with their uncertainty: the one-term ``k1`` as a displacement, and the two-term test model."""
+    m = result.model
+    if m is None:
+        return None
+    one = m.one_term
+    se = np.sqrt(np.diag(m.covariance).clip(min=0))
+    return {
+        "one_term": {
+            "k1": one.k1, "k1_stderr": one.k1_stderr, "cx": one.cx, "cy": one.cy,
+            "covariance_k1_cx_cy": _rounded(one.covariance, 9),
+            "radius": round(one.radius, 4), "radius_px": round(one.radius * m.scale_px, 1),
+            "displacement_px": round(one.displacement_px, 3),
+            "displacement_stderr_px": round(one.displacement_stderr_px, 3),
+        },
+        "two_term": {
+            "k1": m.k1, "k1_stderr": m.k1_stderr, "k2": m.k2, "k2_stderr": m.k2_stderr,
+            "cx": m.cx, "cx_stderr": m.cx_stderr, "cy": m.cy, "cy_stderr": m.cy_stderr,
+            "covariance_k1_k2_cx_cy": _rounded(m.robust_covariance, 9),
+            "model_covariance_k1_k2_cx_cy": _rounded(m.covariance, 9),
+            "model_stderr": _rounded(se, 6),
+        },
+    }
 
 
 def _paper_rules(result: ConsistencyResult) -> dict[str, Any]:
@@ -161,6 +189,13 @@ def regions_mask(details: dict[str, Any], shape: tuple[int, int]) -> np.ndarray:
     return mask
 
 
+def _lens_words(m: GlobalModel) -> str:
+    """The photo's lens in words: the one-term k1 and the displacement it makes at the stated radius."""
+    one = m.one_term
+    return (f"k1 = {one.k1:.3f} ± {one.k1_stderr:.3f}, an undistortion of {one.displacement_px:+.1f} ± "
+            f"{one.displacement_stderr_px:.1f} px at {one.radius * m.scale_px:.0f} px from the centre")
+
+
 def _summary(result: ConsistencyResult, records: list[dict[str, Any]]) -> str:
     n_inf = sum(r["informative"] for r in records)
     if result.verdict == "inconclusive":
@@ -176,14 +211,14 @@ def _summary(result: ConsistencyResult, records: list[dict[str, Any]]) -> str:
         else:
             kind = "a single line"
         return (f"Line(s) {ids} ({kind}) depart from the lens model that explains {m.n_lines_explained} of "
-                f"{n_inf} informative lines (k1 = {m.k1:.3f} ± {m.k1_stderr:.3f}; image-level p = {result.p_value:.2g}).")
+                f"{n_inf} informative lines ({_lens_words(m)}; image-level p = {result.p_value:.2g}).")
     if result.outlier_ids:
         ids = ", ".join(str(i + 1) for i in result.outlier_ids)
-        return (f"The {n_inf} informative lines fit one lens model (k1 = {m.k1:.3f} ± {m.k1_stderr:.3f}) except "
+        return (f"The {n_inf} informative lines fit one lens model ({_lens_words(m)}) except "
                 f"line(s) {ids}, which depart on their own: curved or non-straight objects? The examiner should "
                 f"look at them; lone departing lines are not evidence of a splice, and no compact region's lines "
                 f"follow another lens (image-level p = {result.p_value:.2g}).")
-    return (f"All {n_inf} informative lines fit one lens model (k1 = {m.k1:.3f} ± {m.k1_stderr:.3f}); "
+    return (f"All {n_inf} informative lines fit one lens model ({_lens_words(m)}); "
             f"no line or region departs significantly (image-level p = {result.p_value:.2g}).")
 
 
@@ -228,7 +263,8 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     t = timer.lap("lines", t)
     result = assess([line.points for line in lines], shape, alpha=float(params["alpha"]),
                     min_lines=int(params["min_lines"]), single_lines=bool(params["single_lines"]),
-                    tau_k1=float(params["tau_k1"]), bow_rel=float(params["bow_rel"]), dof=float(params["dof"]))
+                    tau_k1=float(params["tau_k1"]), bow_rel=float(params["bow_rel"]), dof=float(params["dof"]),
+                    tau_photo=float(params["tau_photo"]))
     t = timer.lap("consistency", t)
     records = _line_records(lines, shape, result, params)
     timer.lap("per_line_k1", t)
@@ -236,6 +272,7 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     details = {
         "lines": records,
         RADIAL_DISTORTION_KEY: _global_model(result),
+        "distortion": _distortion(result),
         "p_value": result.p_value if result.informative else None,
         "alpha": result.alpha,
         "test": result.test,

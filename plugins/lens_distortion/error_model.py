@@ -18,3 +18,11 @@ DOF = 1.3
 #: the fit puts 0.2 % beyond +-0.2 (lensfun: 0.4 %, all barrel ultra-wides). The prior of a pasted
 #: piece's lens in :mod:`.regions`.
 DONOR_K1_T = (2.21, -0.0013, 0.0157)
+#: Photo-level model error of the photo's k1 (the one-term model of :class:`.consistency.OneTermModel`),
+#: normalised units, added in quadrature to its structure-jackknife error: what all lines of one photo
+#: share and no within-photo scatter reveals (identical window frames bowing alike, ropes sagging
+#: alike, a lens with k2 seen only where the lines lie). The restricted-maximum-likelihood spread
+#: between photos of one lens, 0.0096, over the one-camera series of the real corpus (29 photos of
+#: one phone, 3 of another, Dresden's Nikons at one focal length); benchmarks/lens_truth.py measures
+#: what it gives.
+TAU_PHOTO = 0.01

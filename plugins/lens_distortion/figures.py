@@ -91,7 +91,8 @@ def k1_plot_svg(details: Mapping[str, Any]) -> bytes:
     model = details.get("global_model")
     if model:
         ax.axhspan(model["k1"] - model["k1_stderr"], model["k1"] + model["k1_stderr"], color="0.85", zorder=0)
-        ax.axhline(model["k1"], color="0.4", lw=1, label=f"global model k1 = {model['k1']:.3f}")
+        ax.axhline(model["k1"], color="0.4", lw=1,
+                   label=f"the photo's k1 = {model['k1']:.3f} ± {model['k1_stderr']:.3f} (band: one s.e.)")
     for cls, colour in COLOURS.items():
         sel = [ln for ln in lines if line_class(ln) == cls]
         if not sel:

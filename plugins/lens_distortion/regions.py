@@ -89,7 +89,7 @@ from scipy.special import gammaln, logsumexp
 
 from .error_model import DONOR_K1_T
 
-__all__ = ["RegionTest", "region_test"]
+__all__ = ["RegionTest", "region_test", "structures"]
 
 REGION_RADIUS = 0.5
 REGION_MIN_LENGTH = 0.2
@@ -232,8 +232,25 @@ def _moved_copy(delta: np.ndarray, s: np.ndarray, family: np.ndarray, normal: np
     return fit, (float(tx[fit.best]), float(ty[fit.best]))
 
 
-def _structures(midpoints: np.ndarray, directions: np.ndarray, members: np.ndarray) -> list[np.ndarray]:
-    """Greedy grouping, in input order, of parallel lines close across their direction."""
+def structures(midpoints: np.ndarray, directions: np.ndarray, members: np.ndarray) -> list[np.ndarray]:
+    """Greedy grouping, in input order, of parallel lines close across their direction.
+
+    Parameters
+    ----------
+    midpoints : ndarray, shape (m, 2)
+        Midpoints of the lines, normalised.
+    directions : ndarray, shape (m,)
+        Their directions, radians.
+    members : ndarray of int, shape (k,)
+        The lines to group (indices into the first two).
+
+    Returns
+    -------
+    list of ndarray of int
+        Each structure's lines: parallel within ``PARALLEL_DEG`` and less than
+        ``STRUCTURE_GAP`` across their direction from its first line (the
+        edges of one bar, frame or moulding, or pieces of one edge).
+    """
     out: list[list[int]] = []
     for i in members:
         for group in out:
@@ -296,7 +313,7 @@ def region_test(
     tested = 0
     for seed in candidates:
         near = candidates[np.hypot(*(midpoints[candidates] - midpoints[seed]).T) <= REGION_RADIUS]
-        groups = _structures(midpoints, directions, near)
+        groups = structures(midpoints, directions, near)
         if len(groups) < MIN_STRUCTURES:
             continue
         tested += 1

@@ -73,6 +73,7 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
         decision = "no significant departure"
     context = {
         "model": details.get("global_model"),
+        "distortion": details.get("distortion"),
         "scale_px": details.get("scale_px", 1.0),
         "test": details.get("test", ""),
         "p_text": "not computed" if p is None else f"{p:.3g}",

@@ -86,6 +86,11 @@ def _measured(finding: DetectorFinding | None) -> tuple[dict[str, float] | None,
     return {"k1": model.k1, "k1_stderr": model.k1_stderr, "k2": model.k2, "k2_stderr": model.k2_stderr}, None
 
 
+def _predicted_k1(prediction: Prediction, measured: dict[str, float]) -> float:
+    """lensfun's k1 in the measurement's model: the one-term fit where the detector held k2 at zero."""
+    return prediction.k1_one_term if measured["k2"] == 0 and measured["k2_stderr"] == 0 else prediction.k1
+
+
 def _applies(info: EvidenceInfo, lens: LensData, dims_changed: bool | None) -> str | None:
     """Why the prediction does not apply to this image, or None when it does."""
     if dims_changed:
@@ -138,7 +143,7 @@ def compare(info: EvidenceInfo, lens_finding: DetectorFinding | None, dims_chang
     measured, reason = _measured(lens_finding)
     if measured is None:
         return LensComparison("lens detector did not measure k1", reason, lens, prediction, None, None, None)
-    d = measured["k1"] - prediction.k1
+    d = measured["k1"] - _predicted_k1(prediction, measured)
     se = measured["k1_stderr"]
     z_crit = float(-ndtri(alpha / 2))
     outcome = "disagrees" if (abs(d) - tolerance) / se > z_crit else "agrees"
@@ -170,7 +175,8 @@ def lens_check(cmp: LensComparison, tolerance: float, alpha: float) -> Check:
                      f"lensfun predicts k1 = {pred.k1:+.4f} for {source}, but {cmp.reason}.")
     z_crit = float(-ndtri(alpha / 2))
     m = cmp.measured
-    text = (f"lensfun predicts k1 = {pred.k1:+.4f} for {source}; the lens detector measured "
+    model_words = "one-term " if m["k2_stderr"] == 0 and m["k2"] == 0 else ""
+    text = (f"lensfun predicts {model_words}k1 = {_predicted_k1(pred, m):+.4f} for {source}; the lens detector measured "
             f"{m['k1']:+.4f} ± {m['k1_stderr']:.4f} (difference {cmp.difference:+.4f}, z = {cmp.z:+.1f}; tolerance "
             f"{tolerance:g}, critical z {z_crit:.2f})")
     if cmp.outcome == "disagrees":

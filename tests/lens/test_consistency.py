@@ -27,6 +27,7 @@ from scipy.ndimage import gaussian_filter1d
 
 from forensics_plugins.lens_distortion import geometry
 from forensics_plugins.lens_distortion.consistency import assess, paper_rules
+from forensics_plugins.lens_distortion.error_model import TAU_PHOTO
 
 SHAPE = (1200, 1600)
 SCALE = geometry.norm_scale(SHAPE)
@@ -282,3 +283,57 @@ def test_global_k1_stderr_widens_when_lines_scatter_beyond_their_error_model():
     print(f"\nwithin 1.96 stated errors: {covered:.0%} (model-based only: {covered_model:.0%})")
     assert covered > covered_model
     assert np.median(robust) < np.median(model)
+
+
+def test_photo_k1_is_the_one_term_model_with_its_error_covering_a_one_term_lens():
+    """The photo's k1 (one-term, centre free) recovers a one-term lens within its stated error.
+
+    Its error carries the photo-level term, so it is never below
+    ``TAU_PHOTO``; the displacement at the stated radius is ``k1 r^3`` in
+    pixels with the same relative error.
+    """
+    pulls = []
+    for seed in range(20):
+        rng = np.random.default_rng(700 + seed)
+        cam = {**_camera(rng), "k2": 0.0}
+        lines = [_line(rng, cam, _in_frame(rng), (0.3, 1.0)) for _ in range(int(rng.integers(10, 16)))]
+        one = assess(_to_pixels(rng, lines), SHAPE).model.one_term
+        assert one.k1_stderr >= TAU_PHOTO
+        assert one.displacement_px == pytest.approx(one.k1 * one.radius**3 * SCALE)
+        assert one.displacement_stderr_px / abs(one.displacement_px) == pytest.approx(one.k1_stderr / abs(one.k1))
+        pulls.append((one.k1 - cam["k1"]) / one.k1_stderr)
+    assert np.mean(np.abs(pulls) < 1.96) >= 0.9
+
+
+def test_photo_k1_error_widens_when_one_direction_bows_on_its_own():
+    """Lines of one direction sharing a bow (one kind of curved object) widen the photo's k1 error.
+
+    The vertical lines of each scene bow alike by 1 px at their middle,
+    towards the centre, as identical window frames leaning the same way
+    would; the horizontal ones are straight. The shared bow moves k1, and
+    the stated error grows with it (the two directions' disagreement and
+    the structure jackknife), so the one-term lens stays covered.
+    """
+    ratios, pulls = [], []
+    for seed in range(12):
+        cam = {**_camera(np.random.default_rng(900 + seed)), "k2": 0.0}
+        fit = {}
+        for bow in (0.0, 1.0):
+            r = np.random.default_rng(900 + seed)
+            _camera(r)
+            lines = []
+            for i in range(14):
+                u = geometry.undistort(_line(r, cam, _in_frame(r), (0.3, 1.0)), **cam)
+                d = np.diff(u[[0, -1]], axis=0)[0]
+                t = np.linspace(-1.0, 1.0, len(u))
+                normal = np.array([-d[1], d[0]]) / np.hypot(*d)
+                normal *= -np.sign(normal @ u.mean(axis=0)) or 1.0
+                shared = bow if abs(d[1]) > abs(d[0]) else 0.0
+                lines.append(geometry.distort(u + np.outer((1.0 - t**2) * shared / SCALE, normal), **cam))
+            fit[bow] = assess(_to_pixels(r, lines), SHAPE).model.one_term
+        ratios.append(fit[1.0].k1_stderr / fit[0.0].k1_stderr)
+        pulls.append((fit[1.0].k1 - cam["k1"]) / fit[1.0].k1_stderr)
+    print(f"\nstated k1 error with a shared bow / without: median {np.median(ratios):.2f}; "
+          f"within 1.96: {np.mean(np.abs(pulls) < 1.96):.0%}")
+    assert np.median(ratios) > 1.05
+    assert np.mean(np.abs(pulls) < 1.96) >= 0.8

@@ -135,9 +135,9 @@ def test_agrees_with_lensfuns_own_modifier(camera, lens_text, focal, size, crop_
     assert ours == pytest.approx(theirs, abs=0.004)
 
 
-def _lens_finding(k1=None, se=0.005, status=Status.OK):
+def _lens_finding(k1=None, se=0.005, status=Status.OK, k2_stderr=0.01):
     model = None if k1 is None else RadialDistortion(
-        k1=k1, k1_stderr=se, k2=0.0, k2_stderr=0.01, cx=0.0, cx_stderr=0.01, cy=0.0, cy_stderr=0.01, cx_px=0.0,
+        k1=k1, k1_stderr=se, k2=0.0, k2_stderr=k2_stderr, cx=0.0, cx_stderr=0.01, cy=0.0, cy_stderr=0.01, cx_px=0.0,
         cy_px=0.0, sigma_px=0.3, n_lines_explained=20, n_lines_informative=20).to_details()
     return DetectorFinding("lens_distortion", "0.1.0", "lens_distortion", status, "s", None, None, None,
                            {RADIAL_DISTORTION_KEY: model}, {}, 0.1)
@@ -170,6 +170,18 @@ def test_comparison_outcomes():
     # Within the tolerance but far in standard errors: still agrees (the tolerance is for lensfun's blind spots).
     tight = compare(evidence_info, _lens_finding(predicted + 0.018, se=0.001), False, 0.02, 0.01, 64)
     assert tight.outcome == "agrees" and tight.z > 10
+
+
+def test_a_one_term_measurement_is_compared_with_the_one_term_prediction():
+    """k2 held at zero (k2 = 0 +- 0) is the lens detector's one-term k1: lensfun's one-term fit is its truth."""
+    evidence_info = _d70s_info()
+    prediction = compare(evidence_info, None, False, 0.02, 0.01, 64).prediction
+    assert abs(prediction.k1 - prediction.k1_one_term) > 0.02
+    one = compare(evidence_info, _lens_finding(prediction.k1_one_term, k2_stderr=0.0), False, 0.02, 0.01, 64)
+    assert one.difference == pytest.approx(0.0) and one.outcome == "agrees"
+    assert "one-term k1" in lens_check(one, 0.02, 0.01).observation
+    two = compare(evidence_info, _lens_finding(prediction.k1_one_term), False, 0.02, 0.01, 64)
+    assert two.difference == pytest.approx(prediction.k1_one_term - prediction.k1)
 
 
 def test_prediction_does_not_apply():
