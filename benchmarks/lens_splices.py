@@ -24,6 +24,22 @@ piece holds lines of two directions at least 30 degrees apart):
   points at the pasted piece (over all cases of the row; blank for
   controls, which have no mask).
 
+Then what the pasted lines actually do (issue 37, item 3):
+
+* per kind, the informative lines inside the mask against those outside
+  it: the share departing by more than two standard errors (``|z| > 2``)
+  and the median ``|z|``;
+* the departure a paste should cause, from the recipes and the lens each
+  photo shows untouched (its control's ``k1 ± stderr``): a line moved from
+  normalised distance ``d_s`` to ``d_d`` reads ``k1 d_s / d_d`` (paper
+  eqs. 1-5, to first order), so a piece from another camera departs by
+  ``k1_donor d_s / d_d - k1_host`` and a moved one by ``k1_host (d_s / d_d
+  - 1)`` (a rescaled one by ``k1_host (s d_s / d_d - 1)`` for scale ``s``);
+  the mean departure of the pasted lines is set beside it, and the cases
+  where it is measurable (``|predicted| > 2`` times its error and the
+  pasted lines' combined error) are counted, with how many of those hold
+  two directions and were called (p < 0.01).
+
 ``--out`` saves every case's record (status, p-value, evidence, the region,
 informative lines, the global k1, which lines lie in the mask, the time
 ``analyse`` took). ``--module`` names another copy of the plugin, a package
@@ -146,7 +162,11 @@ def run_one(job: tuple[str, Path, dict[str, str]]) -> dict[str, Any]:
     lines = details.get("lines") or []
     region = details.get("region")
     model = details.get("global_model") or {}
+    if not row["mask"]:
+        record["departures"] = [{"z": ln["z"], "in_mask": False} for ln in lines
+                                if ln.get("informative") and ln.get("z") is not None]
     record.update({
+        "host": row.get("host"), "donor": row.get("donor"),
         "status": result.status.value, "p_value": result.p_value, "evidence": details.get("evidence"),
         "region": None if region is None else {
             key: region.get(key)
@@ -158,6 +178,10 @@ def run_one(job: tuple[str, Path, dict[str, str]]) -> dict[str, Any]:
     })
     if row["mask"]:
         mask = np.asarray(Image.open(suite / row["mask"]).convert("L")) >= 128
+        record["departures"] = [
+            {"z": ln["z"], "delta_k1": ln["delta_k1"], "delta_k1_stderr": ln["delta_k1_stderr"],
+             "in_mask": bool(lines_in_mask(lines, [ln["id"]], mask))}
+            for ln in lines if ln.get("informative") and ln.get("z") is not None]
         region_in = lines_in_mask(lines, region["line_ids"], mask) if region else []
         flagged_in = lines_in_mask(lines, record["flagged_line_ids"], mask)
         record.update({"region_line_ids_in_mask": region_in, "flagged_line_ids_in_mask": flagged_in,
@@ -222,6 +246,60 @@ def print_summary(records: list[dict[str, Any]]) -> None:
         print(f"  {r['file']}: {r['status']}")
 
 
+def print_pasted_lines(records: list[dict[str, Any]], recipes: dict[str, dict[str, Any]]) -> None:
+    """Print what the pasted lines do: their departures, and the departure the paste should cause.
+
+    Parameters
+    ----------
+    records : list of dict
+        Records of :func:`run_one`.
+    recipes : dict
+        The suite's ``recipes.json`` cases by file name.
+    """
+    print("\ninformative lines inside the pasted piece against outside it: share |z| > 2, median |z|")
+    for kind in KINDS:
+        rows = [r for r in records if r["kind"] == kind and r["status"] == "ok"]
+        for label, inside in (("inside", True), ("outside", False)):
+            z = np.abs([d["z"] for r in rows for d in r.get("departures", []) if d["in_mask"] == inside])
+            if z.size:
+                print(f"  {kind:13s} {label:8s} {z.size:5d} lines  |z| > 2: {np.mean(z > 2):5.1%}  median "
+                      f"{np.median(z):.2f}")
+    lens = {r["host"]: (r["k1"], r["k1_stderr"]) for r in records
+            if r["kind"] == "control" and r["status"] == "ok" and r["k1"] is not None}
+    print("\nthe departure a paste should cause (from the controls' k1) against the pasted lines' mean departure")
+    for kind in KINDS[:3]:
+        rows = []
+        for r in records:
+            recipe = recipes.get(r["file"])
+            pasted = [d for d in r.get("departures", []) if d["in_mask"] and d.get("delta_k1_stderr")]
+            if r["kind"] != kind or r["status"] != "ok" or recipe is None or r["host"] not in lens or not pasted:
+                continue
+            distance = recipe["distance_from_centre"]
+            ratio = distance["source"] / max(distance["destination"], 1e-3)
+            host, host_se = lens[r["host"]]
+            if kind == "other_camera":
+                if r["donor"] not in lens:
+                    continue
+                donor, donor_se = lens[r["donor"]]
+                predicted, predicted_se = donor * ratio - host, float(np.hypot(donor_se * ratio, host_se))
+            else:
+                factor = ratio * (recipe.get("scale") or 1.0) - 1.0
+                predicted, predicted_se = host * factor, abs(host_se * factor)
+            w = np.array([d["delta_k1_stderr"] for d in pasted]) ** -2.0
+            observed = float(np.sum(w * [d["delta_k1"] for d in pasted]) / w.sum())
+            rows.append((predicted, predicted_se, observed, float(w.sum() ** -0.5), r))
+        if len(rows) < 2:
+            continue
+        predicted = np.array([x[0] for x in rows])
+        observed = np.array([x[2] for x in rows])
+        measurable = [x for x in rows if abs(x[0]) > 2.0 * max(x[1], x[3])]
+        both = [x for x in measurable if x[4]["two_directions"] == "yes"]
+        called = [x for x in both if x[4]["p_value"] is not None and x[4]["p_value"] < P_CALLED]
+        print(f"  {kind:13s} n {len(rows):3d}  |predicted| median {np.median(np.abs(predicted)):.3f}  pasted lines' "
+              f"error median {np.median([x[3] for x in rows]):.3f}  correlation {np.corrcoef(predicted, observed)[0, 1]:+.2f}"
+              f"  measurable {len(measurable)}, of them in two directions {len(both)}, called {len(called)}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--suite", type=Path, default=DEFAULT_SUITE)
@@ -245,6 +323,10 @@ def main() -> None:
     print(f"{args.module} ({spec.__file__}), version {getattr(spec, 'VERSION', '?')}: {len(records)} cases "
           f"from {args.suite} in {wall:.0f} s on {args.workers} workers")
     print_summary(records)
+    recipes_file = args.suite / "recipes.json"
+    if recipes_file.exists():
+        recipes = {c["file"]: c for c in json.loads(recipes_file.read_text())["cases"]}
+        print_pasted_lines(records, recipes)
     if args.out is not None:
         args.out.write_text(json.dumps({"suite": str(args.suite), "module": args.module,
                                         "module_file": spec.__file__, "version": getattr(spec, "VERSION", None),
