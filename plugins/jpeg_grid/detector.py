@@ -48,6 +48,7 @@ from .lattice import FREQUENCIES, MIN_FREQUENCIES, block_any, block_coefficients
 from .luminance import MIN_SIDE, Luminance, luminance
 from .nfa import finite_log10, log10_binomial_tail, nfa_text
 from .regions import P_VOTE, W, Region, find_regions, log10_n_tests, min_region_pixels
+from .resampling import MIN_REGIONS, MIN_SPREAD_DEG, PERP_TOL, PROFILE_REL, PROFILE_TOL, RadialWarp, radial_warp
 from .votes import grid_code, grid_origin, vote_map
 from .zeros import ZERO_THRESHOLD, flat_blocks, zero_counts
 
@@ -126,14 +127,14 @@ def _region_tiles(labels: np.ndarray, region: Region, cell: int) -> np.ndarray:
 
 
 def _region_record(i: int, stage: str, region: Region, tiles: np.ndarray, cell: int, shape: tuple[int, int],
-                   log10_threshold: float) -> dict[str, Any]:
+                   log10_threshold: float, explained: bool = False) -> dict[str, Any]:
     dx, dy = grid_origin(region.grid)
     x0, y0, x1, y1 = region.bbox
     bbox_area = (x1 - x0 + 1) * (y1 - y0 + 1)
     log10_nfa = finite_log10(region.log10_nfa)
     return {
         "id": i,
-        "stage": stage,
+        "stage": "resampled" if explained else stage,
         "grid": [dx, dy],
         "bbox_px": [x0, y0, x1 + 1, y1 + 1],
         "pixels": region.n_pixels,
@@ -141,7 +142,7 @@ def _region_record(i: int, stage: str, region: Region, tiles: np.ndarray, cell: 
         "area_fraction": round(float(tiles.sum() * cell * cell / (shape[0] * shape[1])), 4),
         "density": round(region.n_pixels / bbox_area, 4),
         "log10_nfa": round(float(log10_nfa), 2),
-        "meaningful": bool(log10_nfa < log10_threshold),
+        "meaningful": bool(log10_nfa < log10_threshold and not explained),
         "tiles_rle": _rle(tiles),
     }
 
@@ -217,6 +218,19 @@ def _votes_of(y: np.ndarray) -> np.ndarray:
     return vote_map(zero_counts(y), flat_blocks(y))
 
 
+def _processing_text(processing: dict[str, Any] | None) -> str:
+    """The processing the grid shows, as a sentence for the summary (empty when none)."""
+    if not processing:
+        return ""
+    profile = processing["profile_px"]
+    radii = [p["radius_px"] for p in profile]
+    shifts = [p["shift_px"] for p in profile]
+    return (f" The photo was resampled by a radial warp about its centre after a first JPEG compression, as lens "
+            f"correction does: {len(profile)} regions at {min(radii):.0f}-{max(radii):.0f} px from the centre vote "
+            f"for the main grid moved {processing['direction']} along their own radius by {min(shifts):.0f}-"
+            f"{max(shifts):.0f} px. That is processing, not a pasted piece.")
+
+
 def _summary(details: dict[str, Any]) -> str:
     main = details["main_grid"]
     dx, dy = main["origin"]
@@ -236,9 +250,11 @@ def _summary(details: dict[str, Any]) -> str:
                 f"piece of a JPEG pasted into an uncompressed image does.")
     crop = (" The main grid is not at (0, 0): the photo was probably cropped after compression."
             if details["cropped"] else "")
+    crop += _processing_text(details.get("processing"))
     lead = f"Main JPEG grid at origin ({dx}, {dy}) (NFA {nfa_text(main['log10_nfa'])})"
     if not hits:
-        best = details["regions"][0]["log10_nfa"] if details["regions"] else None
+        candidates = [r for r in details["regions"] if r["stage"] != "resampled"]
+        best = candidates[0]["log10_nfa"] if candidates else None
         tail = "" if best is None else f" (strongest candidate NFA {nfa_text(best)})"
         return f"{lead}; no region votes significantly for another grid{tail}.{crop}"
     r = hits[0]
@@ -258,6 +274,23 @@ def _summary(details: dict[str, Any]) -> str:
     return (f"{lead}; {where} votes for the grid at ({r['grid'][0]}, {r['grid'][1]}) (NFA "
             f"{nfa_text(r['log10_nfa'])}){more}: its pixels were compressed on another grid, as a pasted piece "
             f"is.{crop}")
+
+
+def _processing(warp: RadialWarp, records: list[dict[str, Any]]) -> dict[str, Any]:
+    """The radial resampling as processing: what it is, the regions it explains and its sampled profile."""
+    return {
+        "kind": "radial resampling",
+        "description": ("resampled by a radial warp about its centre after a first JPEG compression, as lens "
+                        "correction does: processing that inserts, moves or removes no content"),
+        "direction": "outwards" if warp.sign > 0 else "inwards",
+        "n_regions": len(warp.explained),
+        "region_ids_listed": [r["id"] for r in records if r["stage"] == "resampled"],
+        "shift_at_half_diagonal_px": round(warp.at_corner_px, 2),
+        "profile_px": [{"radius_px": r, "shift_px": round(m, 2)} for r, m in warp.profile],
+        "rule": (f"at least {MIN_REGIONS} regions in directions at least {MIN_SPREAD_DEG:g} degrees apart whose "
+                 f"grids are the main grid shifted, modulo 8, along their own radius (within {PERP_TOL:g} px) by one "
+                 f"radial profile D(r) = a (r / R)^3 (within {PROFILE_TOL:g} px or {100 * PROFILE_REL:g} %)"),
+    }
 
 
 def analyse_luminance(lum: Luminance, params: Mapping[str, Any],
@@ -365,16 +398,22 @@ def analyse_luminance(lum: Luminance, params: Mapping[str, Any],
         t = _timed(marks, "missing_regions", t)
     found.sort(key=lambda f: f[1].log10_nfa)
     meaningful = [f for f in found if f[1].log10_nfa < log10_threshold]
+    foreign = [f for f in meaningful if f[0] == "foreign"]
+    warp = radial_warp([f[1] for f in foreign], grid_origin(main), shape) if significant else None
+    explained = [] if warp is None else [foreign[i] for i in warp.explained]
+    evidence = [f for f in meaningful if not any(f is e for e in explained)]
     # Without a detection, the strongest candidate is kept to show how far it was from one.
-    listed = meaningful[: int(params["max_regions_listed"])] if meaningful else found[:1]
-    details["regions"] = [_region_record(i + 1, stage, r, tiles(), cell, shape, log10_threshold)
-                          for i, (stage, r, tiles) in enumerate(listed)]
-    details["n_meaningful"] = len(meaningful)
+    listed = (evidence + explained)[: int(params["max_regions_listed"])] if meaningful else found[:1]
+    is_explained = [any(f is e for e in explained) for f in listed]
+    details["regions"] = [_region_record(i + 1, stage, r, tiles(), cell, shape, log10_threshold, x)
+                          for i, ((stage, r, tiles), x) in enumerate(zip(listed, is_explained))]
+    details["n_meaningful"] = len(evidence)
+    details["processing"] = None if warp is None else _processing(warp, details["regions"])
     _timed(marks, "report_data", t)
     details["elapsed_s"] = marks
-    if not significant and not meaningful:
+    if not significant and not evidence:
         return DetectorResult(Status.INCONCLUSIVE, _summary(details), details=details)
-    nfa = float(min(1.0, 10.0 ** details["regions"][0]["log10_nfa"])) if meaningful else 1.0
+    nfa = float(min(1.0, 10.0 ** details["regions"][0]["log10_nfa"])) if evidence else 1.0
     return DetectorResult(status=Status.OK, summary=_summary(details), score=1.0 - nfa, nfa=nfa, details=details)
 
 

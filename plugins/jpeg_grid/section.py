@@ -15,6 +15,7 @@ from .nfa import nfa_text
 _STAGE_WORDS = {
     "foreign": "own grid",
     "missing": "main grid missing",
+    "resampled": "main grid moved by a radial warp (processing)",
 }
 
 
@@ -25,7 +26,8 @@ def _region_rows(regions: list[dict[str, Any]]) -> list[dict[str, Any]]:
         "area": f"{100 * r['area_fraction']:.1f} %", "pixels": r["pixels"],
         "density": f"{100 * r['density']:.1f} %", "nfa": nfa_text(r["log10_nfa"]),
         "css": "line-flagged" if r["meaningful"] else "",
-        "verdict": "meaningful" if r["meaningful"] else "not meaningful",
+        "verdict": ("explained by the radial warp" if r["stage"] == "resampled" else
+                    "meaningful" if r["meaningful"] else "not meaningful"),
     } for r in regions]
 
 

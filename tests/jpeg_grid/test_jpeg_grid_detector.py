@@ -286,3 +286,39 @@ def test_ijg_quality_estimate():
         table = np.asarray(Image.open(io.BytesIO(data)).quantization[0], dtype=float).reshape(8, 8)
         assert ijg_quality(table) == q
     assert ijg_quality(None) is None
+
+
+def _lens_corrected(rgb: np.ndarray, k1: float) -> np.ndarray:
+    """``rgb`` remapped by OpenCV's undistortion with one radial term about the centre, as an editor's lens correction."""
+    import cv2
+
+    h, w = rgb.shape[:2]
+    camera = np.array([[0.9 * w, 0.0, (w - 1) / 2], [0.0, 0.9 * w, (h - 1) / 2], [0.0, 0.0, 1.0]])
+    return cv2.undistort(rgb, camera, np.array([k1, 0.0, 0.0, 0.0]), None, camera)
+
+
+def test_lens_correction_is_named_processing_and_a_piece_pasted_into_it_is_still_found(tmp_path):
+    """A camera JPEG lens-corrected and saved at quality 98 keeps its first grid shifted along each radius.
+
+    That is processing, not a paste: no region is reported as compressed on
+    another grid, and the finding names the radial resampling. A piece of
+    another JPEG pasted near the centre's left, on a grid shifted by (3, 5)
+    (not along its radius), is still reported as foreign.
+    """
+    rng = np.random.default_rng(38)
+    first = synth.decode_cropped(synth.jpeg_bytes(synth.render_scene(rng, (1200, 1600), "astronaut"), 85))
+    corrected = _lens_corrected(first, -0.08)
+    result = analyse(load_evidence(_file(tmp_path, "corrected.jpg", synth.jpeg_bytes(corrected, 98))), DEFAULT_PARAMS)
+    processing = result.details["processing"]
+    assert processing and processing["kind"] == "radial resampling" and processing["n_regions"] >= 2
+    assert result.details["n_meaningful"] == 0 and result.nfa == 1.0
+    assert "radial warp about its centre" in result.summary and "processing" in result.summary
+    check_result(result)
+
+    donor = synth.decode_cropped(synth.jpeg_bytes(synth.render_scene(rng, (1200, 1600), "coffee"), 80, (3, 5)), (3, 5))
+    pasted = corrected.copy()
+    pasted[450:750, 350:650] = donor[450:750, 350:650]
+    spliced = analyse(load_evidence(_file(tmp_path, "spliced.jpg", synth.jpeg_bytes(pasted, 98))), DEFAULT_PARAMS)
+    foreign = [r for r in spliced.details["regions"] if r["meaningful"]]
+    assert foreign and foreign[0]["grid"] == [3, 5] and foreign[0]["stage"] == "foreign"
+    assert spliced.nfa < 1e-6
