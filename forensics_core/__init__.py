@@ -5,7 +5,7 @@ Public API for users and plugin authors. Plugins import from here only.
 
 from importlib.metadata import PackageNotFoundError, version
 
-from .contracts import RADIAL_DISTORTION_KEY, RadialDistortion
+from .contracts import PROCESSING_KEY, RADIAL_DISTORTION_KEY, Processing, RadialDistortion
 from .findings import (
     DetectorFinding,
     DetectorResult,
@@ -66,6 +66,8 @@ __all__ = [
     "EvidenceInfo",
     "Findings",
     "MetadataTag",
+    "PROCESSING_KEY",
+    "Processing",
     "RADIAL_DISTORTION_KEY",
     "RadialDistortion",
     "Status",

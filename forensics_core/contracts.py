@@ -94,3 +94,44 @@ class RadialDistortion:
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values.values()):
             return None
         return cls(**values)
+
+
+#: The key under which a finding's ``details`` name global processing the photo shows (:class:`Processing`).
+PROCESSING_KEY = "processing"
+
+
+@dataclass(frozen=True)
+class Processing:
+    """Global processing a detector recognised in the photo: nothing inserted, moved or removed.
+
+    Published under ``details["processing"]``; the report states it on its
+    first page, beside the verdict, so that an examiner reads processing
+    (lens correction, resizing, recompression) as processing and not as a
+    trace of manipulation.
+
+    Attributes
+    ----------
+    kind : str
+        A short name, e.g. ``"radial resampling"``.
+    description : str
+        What was done, completing "The photo was ...", e.g. ``"resampled by
+        a radial warp about its centre after a first JPEG compression, as
+        lens correction does"``.
+    """
+
+    kind: str
+    description: str
+
+    def to_details(self) -> dict[str, Any]:
+        """The JSON form stored in the publishing finding's details (a detector may add its evidence beside it)."""
+        return asdict(self)
+
+    @classmethod
+    def from_finding(cls, finding: DetectorFinding | None) -> Processing | None:
+        """The processing a finding stood by: None unless its status is ``ok`` and it names one."""
+        if finding is None or finding.status is not Status.OK or not isinstance(finding.details, Mapping):
+            return None
+        record = finding.details.get(PROCESSING_KEY)
+        if not isinstance(record, Mapping) or not all(isinstance(record.get(k), str) for k in ("kind", "description")):
+            return None
+        return cls(kind=record["kind"], description=record["description"])

@@ -25,6 +25,7 @@ from jinja2 import Environment, FunctionLoader, StrictUndefined
 from markupsafe import Markup
 
 from ..calibration.model import WEAK_SUPPORT_LR, supports
+from ..contracts import Processing
 from ..defaults import PAPER_SIZES
 from ..evidence import Evidence
 from ..findings import ExifSummary, Findings, Verdict
@@ -264,7 +265,10 @@ def _summary(findings: Findings) -> dict[str, Any]:
                             "nothing is said for or against an original.",
         }[verdict.label.value]
     lr_summary = _lr_summary(verdict, findings.detectors)
+    processing = [{"detector": f.name, "kind": p.kind, "description": p.description}
+                  for f in findings.detectors if (p := Processing.from_finding(f)) is not None]
     return {
+        "processing": processing,
         "label": verdict.label.value,
         "outcome": wording.OUTCOME_WORDS[verdict.label],
         "tension": _tension(verdict, lr_summary, rows),

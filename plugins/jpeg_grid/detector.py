@@ -41,7 +41,7 @@ import numpy as np
 from PIL import Image
 from scipy import ndimage
 
-from forensics_core import DetectorResult, Evidence, Status
+from forensics_core import PROCESSING_KEY, DetectorResult, Evidence, Processing, Status
 
 from .lattice import FREQUENCIES, MIN_FREQUENCIES, block_any, block_coefficients, estimate_steps, missing_regions, \
     off_lattice
@@ -250,7 +250,7 @@ def _summary(details: dict[str, Any]) -> str:
                 f"piece of a JPEG pasted into an uncompressed image does.")
     crop = (" The main grid is not at (0, 0): the photo was probably cropped after compression."
             if details["cropped"] else "")
-    crop += _processing_text(details.get("processing"))
+    crop += _processing_text(details.get(PROCESSING_KEY))
     lead = f"Main JPEG grid at origin ({dx}, {dy}) (NFA {nfa_text(main['log10_nfa'])})"
     if not hits:
         candidates = [r for r in details["regions"] if r["stage"] != "resampled"]
@@ -279,9 +279,8 @@ def _summary(details: dict[str, Any]) -> str:
 def _processing(warp: RadialWarp, records: list[dict[str, Any]]) -> dict[str, Any]:
     """The radial resampling as processing: what it is, the regions it explains and its sampled profile."""
     return {
-        "kind": "radial resampling",
-        "description": ("resampled by a radial warp about its centre after a first JPEG compression, as lens "
-                        "correction does: processing that inserts, moves or removes no content"),
+        **Processing("radial resampling", "resampled by a radial warp about its centre after a first JPEG "
+                     "compression, as lens correction does").to_details(),
         "direction": "outwards" if warp.sign > 0 else "inwards",
         "n_regions": len(warp.explained),
         "region_ids_listed": [r["id"] for r in records if r["stage"] == "resampled"],
@@ -408,7 +407,7 @@ def analyse_luminance(lum: Luminance, params: Mapping[str, Any],
     details["regions"] = [_region_record(i + 1, stage, r, tiles(), cell, shape, log10_threshold, x)
                           for i, ((stage, r, tiles), x) in enumerate(zip(listed, is_explained))]
     details["n_meaningful"] = len(evidence)
-    details["processing"] = None if warp is None else _processing(warp, details["regions"])
+    details[PROCESSING_KEY] = None if warp is None else _processing(warp, details["regions"])
     _timed(marks, "report_data", t)
     details["elapsed_s"] = marks
     if not significant and not evidence:

@@ -8,7 +8,7 @@ import pytest
 from PIL import Image
 from scipy import ndimage
 
-from forensics_core import EvidenceError, Status, load_evidence
+from forensics_core import DetectorFinding, EvidenceError, Processing, Status, load_evidence
 from forensics_core.findings import check_result
 from forensics_plugins.jpeg_grid import synth
 from forensics_plugins.jpeg_grid.detector import analyse, ijg_quality
@@ -314,6 +314,11 @@ def test_lens_correction_is_named_processing_and_a_piece_pasted_into_it_is_still
     assert result.details["n_meaningful"] == 0 and result.nfa == 1.0
     assert "radial warp about its centre" in result.summary and "processing" in result.summary
     check_result(result)
+    finding = DetectorFinding("jpeg_grid", "2", "jpeg_grid", result.status, result.summary, result.score, None,
+                              result.nfa, result.details, {}, 0.0)
+    assert Processing.from_finding(finding) == Processing(
+        "radial resampling", "resampled by a radial warp about its centre after a first JPEG compression, as lens "
+        "correction does")
 
     donor = synth.decode_cropped(synth.jpeg_bytes(synth.render_scene(rng, (1200, 1600), "coffee"), 80, (3, 5)), (3, 5))
     pasted = corrected.copy()
