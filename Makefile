@@ -15,7 +15,7 @@ SYSTEM_PACKAGES := libpango-1.0-0 libpangoft2-1.0-0 libharfbuzz-subset0 fonts-de
 VALIDATION ?= out/validation
 REAL ?= ../shared/data/real
 
-.PHONY: demo test validate validate-real validate-lens-splices calibrate bench bytecode check-python system-packages clean
+.PHONY: demo test validate validate-real validate-lens-splices validate-innocent-processing calibrate bench bytecode check-python system-packages clean
 
 demo: bytecode
 	$(PY) -m forensics_core analyze $(SAMPLES) --out $(OUT) --case-id DEMO-1 --exhibit-id 1
@@ -53,6 +53,16 @@ validate-lens-splices: $(if $(wildcard $(REAL)),bytecode)
 	@if [ ! -d "$(REAL)" ]; then echo "the real corpus is absent ($(REAL)): no lens splices built"; exit 0; fi; \
 	$(PY) -m forensics_core validate lens-splices --corpus "$(REAL)" --out $(OUT)/validation-lens-splices && \
 	echo "page: $(OUT)/validation-lens-splices/validation.html; cases and recipes: $(OUT)/validation-lens-splices/cases/"
+
+# The same building photos only processed as editors and platforms do (lens
+# correction, rotation, keystone, crop, resizing, levels, sharpening, noise
+# reduction, platform re-encodes, PNG export), all authentic, made into
+# $(OUT)/validation-innocent-processing/cases: the detectors' false alarms on
+# innocent processing; nothing is shipped. No corpus, nothing to build.
+validate-innocent-processing: $(if $(wildcard $(REAL)),bytecode)
+	@if [ ! -d "$(REAL)" ]; then echo "the real corpus is absent ($(REAL)): no processed photos built"; exit 0; fi; \
+	$(PY) -m forensics_core validate innocent-processing --corpus "$(REAL)" --out $(OUT)/validation-innocent-processing && \
+	echo "page: $(OUT)/validation-innocent-processing/validation.html; cases and recipes: $(OUT)/validation-innocent-processing/cases/"
 
 # Likelihood-ratio calibrators fitted on the shipped real record (refresh it
 # first with validate-real); the same record gives the same calibrators.

@@ -29,5 +29,6 @@ KEY_TYPES = ("ecdsa-p256", "rsa-3072")
 #: Seed and size of the built-in synthetic validation suite (``forensics validate synthetic``).
 DEFAULT_SEED = 2026
 DEFAULT_COUNT = 20
-#: The real-photo corpus (``forensics validate lens-splices --corpus``): research use only, never in the repository.
+#: The real-photo corpus (``forensics validate lens-splices|innocent-processing --corpus``): research use only,
+#: never in the repository.
 DEFAULT_REAL_CORPUS = "../shared/data/real"

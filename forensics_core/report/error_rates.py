@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 from ..findings import Findings
 from ..plugins import one_line
-from ..validation import LENS_SPLICES, SYNTHETIC
+from ..validation import INNOCENT_PROCESSING, LENS_SPLICES, SYNTHETIC
 from ..validation.cases import SET_CONDITION
 from ..validation.metrics import Rate
 from ..validation.record import SHIPPED, SHIPPED_REAL, VERDICT, MethodMetrics, ValidationRecord, shipped_record
@@ -88,6 +88,11 @@ def describe(record: ValidationRecord) -> str:
         return (f"{counts} made by program from real camera photos of buildings (seed {d.seed}): pieces with long "
                 "straight edges pasted from another camera's photo, moved within the photo or rescaled, and the same "
                 "hosts re-saved without a paste, all as JPEG. The photos are real; the forgeries are not a forger's.")
+    if d.name == INNOCENT_PROCESSING:
+        return (f"{counts} made by program from real camera photos of buildings (seed {d.seed}): each processed as "
+                "editors and platforms do (lens correction, rotation, keystone, crop, resizing, levels and gamma, "
+                "unsharp mask, noise reduction, platform re-encoding, PNG export), no content inserted, moved or "
+                "removed. The photos are real and authentic; the processing is not an editor's own.")
     sets: dict[str, list[int]] = {}
     for case in record.cases:
         where = case.get("conditions", {}).get(SET_CONDITION)

@@ -18,6 +18,7 @@ _LAZY = {
     "ValidationRecord": "record", "read_record": "record", "shipped_record": "record",
     "default_workers": "runner",
     "LENS_SPLICES": "lens_splices", "lens_splices_suite": "lens_splices",
+    "INNOCENT_PROCESSING": "innocent_processing", "innocent_processing_suite": "innocent_processing",
     "RECORD_NAME": "run", "SYNTHETIC": "run", "synthetic_suite": "run", "validate": "run",
 }
 

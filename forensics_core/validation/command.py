@@ -18,15 +18,16 @@ console = Console(stderr=True, highlight=False, emoji=False)
 @click.argument("suites", nargs=-1, required=True)
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Output folder: validation.json, validation.html, findings/, thumbnails/ of the authentic photos "
-                   "convicted and, for the synthetic and lens-splices suites, cases/.")
+                   "convicted and, for the suites it builds (synthetic, lens-splices, innocent-processing), cases/.")
 @click.option("--detectors", help="Comma-separated detector names (default: all installed).")
 @click.option("--workers", type=click.IntRange(min=1), default=None, help="Worker processes (default: number of cores).")
 @click.option("--seed", type=int, default=DEFAULT_SEED, show_default=True,
-              help="Seed of the synthetic and lens-splices suites.")
+              help="Seed of the synthetic, lens-splices and innocent-processing suites.")
 @click.option("--count", type=click.IntRange(min=1), default=DEFAULT_COUNT, show_default=True,
               help="Authentic and spliced photos per plugin in the synthetic suite.")
 @click.option("--corpus", type=click.Path(file_okay=False, path_type=Path), default=DEFAULT_REAL_CORPUS,
-              show_default=True, help="Real corpus the lens-splices suite is built from (only read).")
+              show_default=True,
+              help="Real corpus the lens-splices and innocent-processing suites are built from (only read).")
 @click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=DEFAULT_TIMEOUT_S, show_default=True,
               help="Time limit per detector and photo, seconds.")
 @click.option("--fusion", default="bonferroni", show_default=True, help="Fusion policy for the verdict.")
@@ -37,11 +38,12 @@ def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, corp
     SUITES is `synthetic` (every plugin's synthetic photos, generated from
     --seed; nothing is downloaded), `lens-splices` (the lens-distortion
     paper's three kinds of splice and controls, forged from the real
-    authentic building photos of --corpus with --seed into OUT/cases/) or
-    one or more folders: a set (with a
-    truth.csv, or with authentic/ and tampered/ subfolders and masks) or a
-    parent folder whose descendant folders with a truth.csv are the sets
-    (see the README). Every photo gets the condition `set`.
+    authentic building photos of --corpus with --seed into OUT/cases/),
+    `innocent-processing` (the same photos only processed as editors and
+    platforms do, all authentic, made likewise) or one or more folders: a
+    set (with a truth.csv, or with authentic/ and tampered/ subfolders and
+    masks) or a parent folder whose descendant folders with a truth.csv are
+    the sets (see the README). Every photo gets the condition `set`.
     Per detector and for the fused verdict: ROC AUC with a bootstrap 95%
     interval, TPR at FPR 1% and 5%, the operating point, per-condition and
     per-set figures, localisation MCC and IoU where masks exist, how often
@@ -49,8 +51,8 @@ def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, corp
     photos (their empirical CDF and the photos it convicts).
     """
     from ..analysis import Options
-    from . import (LENS_SPLICES, RECORD_NAME, SYNTHETIC, SuiteError, default_workers, lens_splices_suite, read_suite,
-                   synthetic_suite, validate)
+    from . import (INNOCENT_PROCESSING, LENS_SPLICES, RECORD_NAME, SYNTHETIC, SuiteError, default_workers,
+                   innocent_processing_suite, lens_splices_suite, read_suite, synthetic_suite, validate)
     from .record import VERDICT
 
     host = ctx.find_root().command.host
@@ -63,11 +65,12 @@ def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, corp
     unknown = sorted(set(names or ()) - set(host.detectors))
     if unknown:
         raise click.BadParameter(f"not installed: {', '.join(unknown)}", param_hint="--detectors")
+    from_corpus = {LENS_SPLICES: lens_splices_suite, INNOCENT_PROCESSING: innocent_processing_suite}
     synthetic = SYNTHETIC in suites
-    built = synthetic or LENS_SPLICES in suites
+    built = synthetic or not from_corpus.keys().isdisjoint(suites)
     if built and len(suites) > 1:
-        raise click.BadParameter(f"{SYNTHETIC} and {LENS_SPLICES} are each measured on their own, not with other "
-                                 "suites", param_hint="SUITES")
+        raise click.BadParameter(f"{', '.join((SYNTHETIC, *from_corpus))} are each measured on their own, not with "
+                                 "other suites", param_hint="SUITES")
     try:
         if synthetic:
             with console.status(f"generating the synthetic suite (seed {seed}, {count} + {count} per plugin)"):
@@ -76,8 +79,8 @@ def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, corp
                     on_problem=lambda p: console.print(f"forensics: warning: plugin {p.plugin} could not generate "
                                                        f"synthetic cases: {p.reason}", markup=False))
         elif built:
-            with console.status(f"building the {LENS_SPLICES} suite from {corpus} (seed {seed})"):
-                the_suite = lens_splices_suite(corpus, out_dir / "cases", seed)
+            with console.status(f"building the {suites[0]} suite from {corpus} (seed {seed})"):
+                the_suite = from_corpus[suites[0]](corpus, out_dir / "cases", seed)
         else:
             the_suite = read_suite([Path(s) for s in suites])
     except SuiteError as exc:

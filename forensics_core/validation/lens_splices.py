@@ -47,28 +47,19 @@ References
 
 from __future__ import annotations
 
-import csv
-import hashlib
-import json
 import math
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, replace
-from itertools import zip_longest
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 from PIL import Image
 
-from .. import __version__
-from .cases import TRUTH_FILE, Suite, SuiteError, folder_suite
+from .cases import Suite, SuiteError, folder_suite
+from .real_corpus import RealPhoto, camera_turns, read_photos, write_suite
 
 LENS_SPLICES = "lens-splices"
 OTHER_CAMERA, MOVED, RESCALED, CONTROL = "other_camera", "moved", "rescaled", "control"
-RECIPES_FILE = "recipes.json"
-SETS_FOLDER = "authentic_buildings"
-
-#: OpenSfM's sample photos carry no Make or Model; all were taken with one iPhone 4S.
-_UNNAMED_CAMERAS = {"opensfm_lund": "iPhone 4S", "opensfm_berlin": "iPhone 4S"}
 _QUALITIES = (85, 90, 92, 95, 98)
 _RESIZED_SHARE = 0.25
 _RESIZE_RANGE = (0.6, 0.8)
@@ -104,29 +95,13 @@ class SuiteSize:
 
 
 @dataclass(frozen=True, eq=False)
-class CorpusPhoto:
-    """An authentic photo of the corpus.
+class CorpusPhoto(RealPhoto):
+    """An authentic photo of the corpus with ``segments``: its LSD segments at least 5 % of its shorter side.
 
-    ``size`` is the stored grid's width and height; ``segments`` the LSD
-    segments at least 5 % of its shorter side, shape ``(N, 4)`` as x0, y0, x1,
-    y1 in its pixels.
+    ``segments`` has shape ``(N, 4)``, as x0, y0, x1, y1 in the stored grid's pixels.
     """
 
-    set: str
-    file: str
-    path: Path
-    camera: str
-    size: tuple[int, int]
     segments: np.ndarray
-    sha256: str
-
-    @property
-    def name(self) -> str:
-        return f"{self.set}/{self.file}"
-
-    def describe(self) -> dict[str, object]:
-        return {"set": self.set, "file": self.file, "sha256": self.sha256, "camera": self.camera,
-                "size": list(self.size)}
 
 
 @dataclass(frozen=True)
@@ -213,26 +188,15 @@ def build_lens_splices(corpus: Path, folder: Path, seed: int, size: SuiteSize = 
         made += [_make(plan, pixels, folder) for plan in plans if plan.host is host]
     order = {p.name: i for i, p in enumerate(plans)}
     made.sort(key=lambda m: order[m[0]["name"]])
-    recipes = [recipe for recipe, _ in made]
-    with open(folder / TRUTH_FILE, "w", newline="", encoding="utf-8") as fh:
-        writer = csv.writer(fh)
-        writer.writerow(_HEADER)
-        writer.writerows([row[h] for h in _HEADER] for _, row in made)
-    document = {
-        "suite": LENS_SPLICES, "generator": f"forensics {__version__}", "seed": seed,
-        "corpus": str(corpus.resolve()), "size": asdict(size),
-        "method": {
-            "regions": f"LSD on the luma (copy of at most {_LSD_SIDE} px), rectangle maximising the length of "
-                       f"segments inside it at least {_LONG_EDGE_SHARE:.0%} of the host's shorter side",
-            "two_directions": f"long segments inside whose directions differ by more than {_TWO_DIRECTIONS_DEG:g} degrees",
-            "pixel_grid": "stored, EXIF Orientation ignored",
-            "resampling": "Pillow LANCZOS (donor, rescaled piece, whole-photo downscale); masks bilinear, >= 50 %",
-            "export": f"Pillow JPEG, subsampling {_SUBSAMPLING}, no EXIF, ICC or XMP written",
-        },
-        "cases": recipes,
+    method = {
+        "regions": f"LSD on the luma (copy of at most {_LSD_SIDE} px), rectangle maximising the length of "
+                   f"segments inside it at least {_LONG_EDGE_SHARE:.0%} of the host's shorter side",
+        "two_directions": f"long segments inside whose directions differ by more than {_TWO_DIRECTIONS_DEG:g} degrees",
+        "pixel_grid": "stored, EXIF Orientation ignored",
+        "resampling": "Pillow LANCZOS (donor, rescaled piece, whole-photo downscale); masks bilinear, >= 50 %",
+        "export": f"Pillow JPEG, subsampling {_SUBSAMPLING}, no EXIF, ICC or XMP written",
     }
-    (folder / RECIPES_FILE).write_text(json.dumps(document, indent=1) + "\n", encoding="utf-8")
-    return recipes
+    return write_suite(folder, LENS_SPLICES, corpus, seed, size, method, made, _HEADER)
 
 
 def lens_splices_suite(corpus: Path, folder: Path, seed: int, size: SuiteSize = SuiteSize()) -> Suite:
@@ -243,55 +207,22 @@ def lens_splices_suite(corpus: Path, folder: Path, seed: int, size: SuiteSize = 
 
 def read_corpus(corpus: Path) -> list[CorpusPhoto]:
     """The authentic photos of ``corpus/authentic_buildings/*``, with camera, size and LSD segments."""
-    if not corpus.is_dir():
-        raise SuiteError(f"the real corpus is absent ({corpus}): {LENS_SPLICES} is built from its "
-                         f"{SETS_FOLDER}/* photos")
-    sets = sorted(p.parent for p in (corpus / SETS_FOLDER).glob(f"*/{TRUTH_FILE}"))
-    if not sets:
-        raise SuiteError(f"{corpus}: no {SETS_FOLDER}/*/{TRUTH_FILE} to build {LENS_SPLICES} from")
     photos = []
-    for folder in sets:
-        exif = {row["file"]: row for row in _rows(folder / "exif.csv")}
-        for row in _rows(folder / TRUTH_FILE):
-            if row["label"].strip().lower() != "authentic":
-                continue
-            if row["file"] not in exif:
-                raise SuiteError(f"{folder / 'exif.csv'}: no row for {row['file']}")
-            path = folder / row["file"]
-            try:
-                grid, segments = _segments(path)
-            except OSError as exc:
-                raise SuiteError(f"{path}: not readable as a photo ({exc})") from None
-            with open(path, "rb") as fh:
-                digest = hashlib.file_digest(fh, "sha256").hexdigest()
-            photos.append(CorpusPhoto(folder.name, row["file"], path, _camera(folder.name, exif[row["file"]]), grid,
-                                      segments, digest))
+    for photo in read_photos(corpus, LENS_SPLICES):
+        try:
+            segments = _segments(photo)
+        except OSError as exc:
+            raise SuiteError(f"{photo.path}: not readable as a photo ({exc})") from None
+        photos.append(CorpusPhoto(**vars(photo), segments=segments))
     return photos
 
 
-def _rows(path: Path) -> list[dict[str, str]]:
-    try:
-        with open(path, newline="", encoding="utf-8") as fh:
-            return list(csv.DictReader(fh))
-    except OSError as exc:
-        raise SuiteError(f"{path}: {exc.strerror}") from None
-
-
-def _camera(set_name: str, exif: dict[str, str]) -> str:
-    make, model = (exif.get("make") or "").strip(), (exif.get("model") or "").strip()
-    if not make and not model:
-        # A set's photos without a name are taken as one camera's: its likeliest source, as for OpenSfM's.
-        return _UNNAMED_CAMERAS.get(set_name, f"unknown camera of {set_name}")
-    # "Canon" + "Canon EOS 1000D" is one name, as the corpus's truth files write it.
-    return model if model.lower().startswith(make.lower()) else f"{make} {model}".strip()
-
-
-def _segments(path: Path) -> tuple[tuple[int, int], np.ndarray]:
-    """The stored grid's size and its LSD segments at least 5 % of its shorter side, in its pixels."""
+def _segments(photo: RealPhoto) -> np.ndarray:
+    """The photo's LSD segments at least 5 % of its shorter side, in its stored grid's pixels."""
     import cv2
 
-    with Image.open(path) as img:
-        size = img.size
+    size = photo.size
+    with Image.open(photo.path) as img:
         # JPEG's DCT scaling decodes a reduced copy directly, several times faster than decoding the whole.
         img.draft("L", (_LSD_SIDE, _LSD_SIDE))
         luma = np.asarray(img.convert("L"))
@@ -304,7 +235,7 @@ def _segments(path: Path) -> tuple[tuple[int, int], np.ndarray]:
     scale = np.array([size[0] / luma.shape[1], size[1] / luma.shape[0]] * 2)
     segments = (segments + 0.5) * scale - 0.5
     lengths = np.hypot(segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1])
-    return size, segments[lengths >= _KEPT_EDGE_SHARE * min(size)]
+    return segments[lengths >= _KEPT_EDGE_SHARE * min(size)]
 
 
 def _has_long_edges(photo: CorpusPhoto) -> bool:
@@ -321,11 +252,8 @@ def _plan(photos: list[CorpusPhoto], seed: int, size: SuiteSize) -> list[Plan]:
     if size.other_camera and len(cameras) < 2:
         raise SuiteError(f"{OTHER_CAMERA} cases need photos of two cameras; the corpus has only {cameras[0]}")
     rng = np.random.default_rng(seed)
-    by_camera: dict[str, list[CorpusPhoto]] = {}
-    for i in rng.permutation(len(usable)):
-        by_camera.setdefault(usable[i].camera, []).append(usable[i])
     # One photo of each camera before a second of any: one camera's 32 photos would otherwise fill the hosts.
-    hosts = [p for turn in zip_longest(*by_camera.values()) for p in turn if p is not None][:size.hosts]
+    hosts = camera_turns(usable, rng)[:size.hosts]
     exports = {}
     for host in hosts:
         quality = int(rng.choice(_QUALITIES))

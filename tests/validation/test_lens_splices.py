@@ -32,11 +32,9 @@ def facade(rng, size):
     return np.stack([grey, grey, (grey * 0.9).astype(np.uint8)], axis=-1)
 
 
-@pytest.fixture(scope="module")
-def corpus(tmp_path_factory):
-    root = tmp_path_factory.mktemp("real")
-    rng = np.random.default_rng(7)
-    for name, (make, model, size) in CAMERAS.items():
+def draw_corpus(root, cameras, rng):
+    """Three drawn facades in each set of ``cameras`` (set: make, model, size), and a manipulated photo listed."""
+    for name, (make, model, size) in cameras.items():
         folder = root / "authentic_buildings" / name
         folder.mkdir(parents=True)
         truth = ["file,label,mask,source,camera"]
@@ -52,18 +50,35 @@ def corpus(tmp_path_factory):
     return root
 
 
+@pytest.fixture(scope="module")
+def corpus(tmp_path_factory):
+    return draw_corpus(tmp_path_factory.mktemp("real"), CAMERAS, np.random.default_rng(7))
+
+
 def digests(folder):
     return {p.relative_to(folder).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
             for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
-@pytest.fixture(scope="module")
-def built(corpus, tmp_path_factory):
+def build_reading_only(build, corpus, folder, size):
+    """``build`` (a suite's builder) with seed 11 into ``folder``, checking that the corpus is only read."""
     before = digests(corpus)
-    folder = tmp_path_factory.mktemp("suite")
-    recipes = build_lens_splices(corpus, folder, seed=11, size=SIZE)
+    recipes = build(corpus, folder, seed=11, size=size)
     assert digests(corpus) == before, "the corpus is only read"
     return folder, recipes
+
+
+def seed_decides_the_files(build, corpus, folder, size, tmp_path):
+    """The suite ``build`` made into ``folder`` with seed 11 again, byte for byte, and another with seed 12."""
+    build(corpus, tmp_path / "again", seed=11, size=size)
+    assert digests(tmp_path / "again") == digests(folder)
+    build(corpus, tmp_path / "other", seed=12, size=size)
+    assert (tmp_path / "other" / "recipes.json").read_text() != (folder / "recipes.json").read_text()
+
+
+@pytest.fixture(scope="module")
+def built(corpus, tmp_path_factory):
+    return build_reading_only(build_lens_splices, corpus, tmp_path_factory.mktemp("suite"), SIZE)
 
 
 def truth_rows(folder):
@@ -77,11 +92,7 @@ def pixels(path):
 
 
 def test_the_same_seed_gives_the_same_files_and_another_seed_others(corpus, built, tmp_path):
-    folder, _ = built
-    build_lens_splices(corpus, tmp_path / "again", seed=11, size=SIZE)
-    assert digests(tmp_path / "again") == digests(folder)
-    build_lens_splices(corpus, tmp_path / "other", seed=12, size=SIZE)
-    assert (tmp_path / "other" / "recipes.json").read_text() != (folder / "recipes.json").read_text()
+    seed_decides_the_files(build_lens_splices, corpus, built[0], SIZE, tmp_path)
 
 
 def test_cameras_are_named_from_exif_and_unnamed_sets_by_the_map(corpus):
@@ -173,8 +184,13 @@ def test_a_corpus_of_one_camera_cannot_give_other_camera_cases(corpus, tmp_path)
 
 
 def test_the_cli_says_in_one_line_that_the_corpus_is_absent(tmp_path):
+    says_the_corpus_is_absent("lens-splices", tmp_path)
+
+
+def says_the_corpus_is_absent(suite, tmp_path):
+    """``forensics validate SUITE`` without its corpus: one line, exit 1, no traceback, nothing written."""
     absent = tmp_path / "no-corpus"
-    run = subprocess.run([sys.executable, "-m", "forensics_core", "validate", "lens-splices", "--corpus", absent,
+    run = subprocess.run([sys.executable, "-m", "forensics_core", "validate", suite, "--corpus", absent,
                           "--out", tmp_path / "o", "--detectors", "metadata"], capture_output=True, text=True,
                          timeout=120)
     assert run.returncode == 1 and "Traceback" not in run.stderr
