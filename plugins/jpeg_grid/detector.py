@@ -224,7 +224,7 @@ def _processing_text(processing: dict[str, Any] | None) -> str:
         return ""
     profile = processing["profile_px"]
     radii = [p["radius_px"] for p in profile]
-    shifts = [p["shift_px"] for p in profile]
+    shifts = [abs(p["shift_px"]) for p in profile]
     return (f" The photo was resampled by a radial warp about its centre after a first JPEG compression, as lens "
             f"correction does: {len(profile)} regions at {min(radii):.0f}-{max(radii):.0f} px from the centre vote "
             f"for the main grid moved {processing['direction']} along their own radius by {min(shifts):.0f}-"
@@ -281,14 +281,16 @@ def _processing(warp: RadialWarp, records: list[dict[str, Any]]) -> dict[str, An
     return {
         **Processing("radial resampling", "resampled by a radial warp about its centre after a first JPEG "
                      "compression, as lens correction does").to_details(),
-        "direction": "outwards" if warp.sign > 0 else "inwards",
+        "direction": "outwards" if warp.at_corner_px > 0 else "inwards",
+        "profile_terms_px": [round(t, 2) for t in warp.terms],
         "n_regions": len(warp.explained),
         "region_ids_listed": [r["id"] for r in records if r["stage"] == "resampled"],
         "shift_at_half_diagonal_px": round(warp.at_corner_px, 2),
         "profile_px": [{"radius_px": r, "shift_px": round(m, 2)} for r, m in warp.profile],
         "rule": (f"at least {MIN_REGIONS} regions in directions at least {MIN_SPREAD_DEG:g} degrees apart whose "
                  f"grids are the main grid shifted, modulo 8, along their own radius (within {PERP_TOL:g} px) by one "
-                 f"radial profile D(r) = a (r / R)^3 (within {PROFILE_TOL:g} px or {100 * PROFILE_REL:g} %)"),
+                 f"radial profile D(r) = a (r / R)^3 + b (r / R), R the half diagonal (within {PROFILE_TOL:g} px or "
+                 f"{100 * PROFILE_REL:g} %)"),
     }
 
 

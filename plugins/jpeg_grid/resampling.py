@@ -13,22 +13,23 @@ grid is shifted by whatever the forger's placement made it, one of 63
 offsets, unrelated to where it lies.
 
 A lens correction's displacement is, to first order, ``D(r) = a (r /
-R)^3`` (the one-term radial model, paper eqs. 1-5; ``R`` the half
-diagonal), and a grid only shows it modulo 8: a shift of (8, 1) px reads as
-(0, 1). So a region is explained by the warp when one representative of
+R)^3 + b (r / R)`` (the one-term radial model, paper eqs. 1-5, and the
+zoom an editor adds to fill the frame; ``R`` the half diagonal), and a grid
+only shows it modulo 8: a shift of (8, 1) px reads as (0, 1). So a region is explained by the warp when one representative of
 its grid's shift modulo 8 (``s + 8 (i, j)``) lies along the radius through
 its centre, within ``PERP_TOL`` pixels (rounding each coordinate moves it
 by at most 0.5, and the region spans a range of directions), with a length
 within ``PROFILE_TOL`` (or a share ``PROFILE_REL`` of ``D``, for the higher
 terms of real corrections, at most ``PROFILE_MAX_TOL``) of ``D`` at its
-distance. ``a`` (its sign: the
-warp pushed pixels outwards or inwards) is the value that explains the most
-regions. A paste matches a given profile at its place by chance in a few
+distance. ``(a, b)`` is the
+profile that explains the most regions, found from pairs of the strongest
+regions (two regions fix it) and checked on all. A paste matches a given profile at its place by chance in a few
 per cent of placements where ``D`` is a few pixels (about 4 of the 64
 shifts modulo 8), up to about a fifth far out where it is tens of pixels
-(the tolerance then covers 12 of the 64), so the warp is
-named only when at least ``MIN_REGIONS`` regions in directions at least
-``MIN_SPREAD_DEG`` apart fit one profile, and regions it does not explain
+(the tolerance then covers 12 of the 64), and two
+regions fit some profile always, so the warp is named only when at least
+``MIN_REGIONS`` regions in directions at least ``MIN_SPREAD_DEG`` apart fit
+one profile, and regions it does not explain
 stay foreign: a piece pasted into a lens-corrected photo is still
 reported.
 
@@ -45,6 +46,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from itertools import combinations
 
 import numpy as np
 
@@ -56,10 +58,16 @@ PROFILE_TOL = 1.0
 PROFILE_REL = 0.15
 #: Beyond a few pixels the shift's representatives modulo 8 crowd every length: the tolerance stops here.
 PROFILE_MAX_TOL = 3.0
-MIN_REGIONS = 2
+MIN_REGIONS = 3
 MIN_SPREAD_DEG = 60.0
-#: Shifts searched, pixels at the half diagonal: from half a pixel to far beyond any editor's correction.
-_PROFILE = np.geomspace(0.5, 400.0, 600)
+#: Profiles searched: |D| at the half diagonal and |b| at most this many pixels, beyond any editor's correction.
+MAX_SHIFT_PX = 400.0
+#: The strongest regions whose pairs propose profiles (each pair fixes one per pair of shift representatives).
+SEED_REGIONS = 24
+#: The profiles best supported by the seeds that are then judged on every region.
+_FINALISTS = 50
+#: Two regions closer in distance than this share of the half diagonal cannot separate the two terms.
+MIN_RADIUS_GAP = 0.05
 #: Representatives of a shift modulo 8 within this many periods of it.
 _WRAPS = np.array([(i, j) for i in range(-6, 7) for j in range(-6, 7)], dtype=np.float64)
 
@@ -70,11 +78,10 @@ class RadialWarp:
 
     Attributes
     ----------
-    sign : int
-        +1 when the grid moved outwards (the warp pushed pixels away from
-        the centre), -1 inwards.
+    terms : tuple of float
+        ``(a, b)`` of the profile ``D(r) = a (r / R)^3 + b (r / R)``, pixels.
     at_corner_px : float
-        ``|D|`` at the half diagonal of the fitted profile ``D(r) = a (r / R)^3``.
+        ``D(R)``, pixels: positive when the warp pushed pixels outwards.
     explained : tuple of int
         Indices (into the regions given) of the regions it explains.
     profile : tuple of (float, float)
@@ -83,10 +90,18 @@ class RadialWarp:
         correction's displacement sampled where the old grid shows it).
     """
 
-    sign: int
+    terms: tuple[float, float]
     at_corner_px: float
     explained: tuple[int, ...]
     profile: tuple[tuple[float, float], ...]
+
+
+@dataclass(frozen=True)
+class _Place:
+    index: int
+    rho: float  # distance from the centre / half diagonal
+    angle: float
+    lengths: np.ndarray  # (k,) signed radial lengths of the shift's representatives, pixels
 
 
 def _radial_lengths(region: Region, main_origin: tuple[int, int], u: np.ndarray) -> np.ndarray:
@@ -98,13 +113,50 @@ def _radial_lengths(region: Region, main_origin: tuple[int, int], u: np.ndarray)
     return (candidates @ u)[perp <= PERP_TOL]
 
 
+def _fits(lengths: np.ndarray, expected: np.ndarray) -> np.ndarray:
+    """Whether a representative lies within the tolerance of the expected shift, broadcast."""
+    tolerance = np.clip(PROFILE_REL * np.abs(expected), PROFILE_TOL, PROFILE_MAX_TOL)
+    return (np.abs(lengths - expected) <= tolerance) & (np.abs(expected) >= 0.5)
+
+
+def _profiles(seeds: list[_Place]) -> np.ndarray:
+    """Every profile ``(a, b)`` two seed regions and one representative of each fix, shape (n, 2)."""
+    out = []
+    for p, q in combinations(seeds, 2):
+        if abs(p.rho - q.rho) < MIN_RADIUS_GAP or not (p.lengths.size and q.lengths.size):
+            continue
+        lp, lq = (x.ravel() for x in np.meshgrid(p.lengths, q.lengths))
+        system = np.array([[p.rho**3, p.rho], [q.rho**3, q.rho]])
+        out.append(np.linalg.solve(system, np.vstack((lp, lq))).T)
+    if not out:
+        return np.zeros((0, 2))
+    ab = np.vstack(out)
+    return ab[(np.abs(ab.sum(axis=1)) <= MAX_SHIFT_PX) & (np.abs(ab[:, 1]) <= MAX_SHIFT_PX)]
+
+
+def _explained(places: list[_Place], a: float, b: float) -> list[tuple[float, float, int, float]]:
+    """The places the profile explains: (distance share, radial shift, index, angle) each."""
+    out = []
+    for p in places:
+        expected = a * p.rho**3 + b * p.rho
+        ok = _fits(p.lengths, expected)
+        if ok.any():
+            best = p.lengths[ok][np.argmin(np.abs(p.lengths[ok] - expected))]
+            out.append((p.rho, float(best), p.index, p.angle))
+    return out
+
+
+def _spread_deg(angles: np.ndarray) -> float:
+    return float(np.degrees(np.abs(np.angle(np.exp(1j * (angles[:, None] - angles[None, :]))))).max())
+
+
 def radial_warp(regions: Sequence[Region], main_origin: tuple[int, int], shape: tuple[int, int]) -> RadialWarp | None:
     """The radial warp about the image centre that explains the most regions, if it is established.
 
     Parameters
     ----------
     regions : sequence of Region
-        Foreign regions (grid other than the main one).
+        Foreign regions (grid other than the main one), strongest first.
     main_origin : tuple of int
         The main grid's origin ``(dx, dy)``.
     shape : tuple of int
@@ -126,25 +178,30 @@ def radial_warp(regions: Sequence[Region], main_origin: tuple[int, int], shape: 
         v = np.array([(x0 + x1) / 2.0, (y0 + y1) / 2.0]) - centre
         r = float(np.hypot(*v))
         if r >= 1.0:
-            places.append((i, r, float(np.arctan2(v[1], v[0])), _radial_lengths(region, main_origin, v / r)))
-    best: RadialWarp | None = None
-    for sign in (1, -1):
-        for corner in _PROFILE:
-            matched = []
-            for i, r, angle, lengths in places:
-                expected = sign * corner * (r / half_diagonal) ** 3
-                miss = np.abs(lengths - expected)
-                tolerance = min(max(PROFILE_TOL, PROFILE_REL * abs(expected)), PROFILE_MAX_TOL)
-                if lengths.size and miss.min() <= tolerance and abs(expected) >= 0.5:
-                    matched.append((r, float(sign * lengths[np.argmin(miss)]), i, angle))
-            # The most regions; between equals, the smallest shift (a larger one can alias onto it modulo 8).
-            if len(matched) < MIN_REGIONS or (best is not None and (len(matched), -corner) <=
-                                              (len(best.explained), -best.at_corner_px)):
-                continue
-            angles = np.array([m[3] for m in matched])
-            spread = np.degrees(np.abs(np.angle(np.exp(1j * (angles[:, None] - angles[None, :]))))).max()
-            if spread >= MIN_SPREAD_DEG:
-                matched.sort()
-                best = RadialWarp(sign, float(corner), tuple(sorted(m[2] for m in matched)),
-                                  tuple((round(m[0], 1), m[1]) for m in matched))
-    return best
+            places.append(_Place(i, r / half_diagonal, float(np.arctan2(v[1], v[0])),
+                                 _radial_lengths(region, main_origin, v / r)))
+    seeds = places[:SEED_REGIONS]
+    profiles = _profiles(seeds)
+    if not profiles.size:
+        return None
+    rho = np.concatenate([np.full(p.lengths.size, p.rho) for p in places])
+    lengths = np.concatenate([p.lengths for p in places])
+    owner = np.concatenate([np.full(p.lengths.size, k) for k, p in enumerate(places)])
+    seeded = owner < len(seeds)
+    expected = profiles[:, :1] * rho[seeded][None, :] ** 3 + profiles[:, 1:] * rho[seeded][None, :]
+    hit = np.zeros((profiles.shape[0], len(seeds)), dtype=bool)
+    np.logical_or.at(hit, (slice(None), owner[seeded]), _fits(lengths[seeded][None, :], expected))
+    # The profiles that explain the most seeds are then judged on every region: the most explained wins,
+    # and between equals the smallest shift (a larger one can alias onto it modulo 8).
+    top = profiles[np.lexsort((np.abs(profiles.sum(axis=1)), -hit.sum(axis=1)))[:_FINALISTS]]
+    expected = top[:, :1] * rho[None, :] ** 3 + top[:, 1:] * rho[None, :]
+    explains = np.zeros((top.shape[0], len(places)), dtype=bool)
+    np.logical_or.at(explains, (slice(None), owner), _fits(lengths[None, :], expected))
+    for k in np.lexsort((np.abs(top.sum(axis=1)), -explains.sum(axis=1))):
+        a, b = top[k]
+        matched = _explained(places, float(a), float(b))
+        if len(matched) >= MIN_REGIONS and _spread_deg(np.array([m[3] for m in matched])) >= MIN_SPREAD_DEG:
+            matched.sort()
+            return RadialWarp((float(a), float(b)), float(a + b), tuple(sorted(m[2] for m in matched)),
+                              tuple((round(m[0] * half_diagonal, 1), m[1]) for m in matched))
+    return None
