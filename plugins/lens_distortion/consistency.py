@@ -593,8 +593,9 @@ def _structure_jackknife(lines: _Lines, beta: np.ndarray, cov: np.ndarray, row_w
     edges of one object count once, and, unlike the plain sandwich
     estimator, does not shrink the influence of a structure that dominates
     the fit (a photo whose k1 rests on one bar). Leaving the dominant
-    structures out with a full refit changed the standard errors by less
-    than 5 % on the real corpus, so the one-step form is kept.
+    structures out with a full refit instead moved Cochran's Q/df of the
+    27 Lund photos by 3 % (3.42 to 3.54 before the photo-level terms), so
+    the one-step form is kept.
 
     References
     ----------
@@ -613,7 +614,11 @@ def _structure_jackknife(lines: _Lines, beta: np.ndarray, cov: np.ndarray, row_w
     weighted = columns * row_weight[:, None]
     info = np.zeros((n_clusters, len(free), len(free)))
     np.add.at(info, cluster[lines.ids], np.einsum("ni,nj->nij", weighted, weighted))
-    shift = np.linalg.solve(np.linalg.inv(cov)[None] - info, score[:, :, None])[:, :, 0]
+    precision = np.linalg.pinv(cov)
+    # Where one structure holds all the information on a parameter, leaving it out leaves the parameter
+    # undetermined: the ridge turns that into a very large move (an honest, very large error), not a crash.
+    ridge = 1e-9 * np.diag(np.diag(precision))
+    shift = np.linalg.solve(precision[None] - info + ridge, score[:, :, None])[:, :, 0]
     return shift.T @ shift * ((n_clusters - 1) / max(n_clusters, 1))
 
 
