@@ -402,10 +402,11 @@ def analyse_luminance(lum: Luminance, params: Mapping[str, Any],
     foreign = [f for f in meaningful if f[0] == "foreign"]
     warp = radial_warp([f[1] for f in foreign], grid_origin(main), shape) if significant else None
     explained = [] if warp is None else [foreign[i] for i in warp.explained]
-    evidence = [f for f in meaningful if not any(f is e for e in explained)]
+    explained_ids = {id(f) for f in explained}
+    evidence = [f for f in meaningful if id(f) not in explained_ids]
     # Without a detection, the strongest candidate is kept to show how far it was from one.
     listed = (evidence + explained)[: int(params["max_regions_listed"])] if meaningful else found[:1]
-    is_explained = [any(f is e for e in explained) for f in listed]
+    is_explained = [id(f) in explained_ids for f in listed]
     details["regions"] = [_region_record(i + 1, stage, r, tiles(), cell, shape, log10_threshold, x)
                           for i, ((stage, r, tiles), x) in enumerate(zip(listed, is_explained))]
     details["n_meaningful"] = len(evidence)
