@@ -197,11 +197,12 @@ def radial_warp(regions: Sequence[Region], main_origin: tuple[int, int], shape: 
     expected = top[:, :1] * rho[None, :] ** 3 + top[:, 1:] * rho[None, :]
     explains = np.zeros((top.shape[0], len(places)), dtype=bool)
     np.logical_or.at(explains, (slice(None), owner), _fits(lengths[None, :], expected))
+    angles = np.array([p.angle for p in places])
     for k in np.lexsort((np.abs(top.sum(axis=1)), -explains.sum(axis=1))):
+        if explains[k].sum() < MIN_REGIONS or _spread_deg(angles[explains[k]]) < MIN_SPREAD_DEG:
+            continue
         a, b = top[k]
-        matched = _explained(places, float(a), float(b))
-        if len(matched) >= MIN_REGIONS and _spread_deg(np.array([m[3] for m in matched])) >= MIN_SPREAD_DEG:
-            matched.sort()
-            return RadialWarp((float(a), float(b)), float(a + b), tuple(sorted(m[2] for m in matched)),
-                              tuple((round(m[0] * half_diagonal, 1), m[1]) for m in matched))
+        matched = sorted(_explained(places, float(a), float(b)))
+        return RadialWarp((float(a), float(b)), float(a + b), tuple(sorted(m[2] for m in matched)),
+                          tuple((round(m[0] * half_diagonal, 1), m[1]) for m in matched))
     return None
