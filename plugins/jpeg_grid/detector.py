@@ -26,6 +26,13 @@ In a JPEG file the grid (0, 0) is never searched as a foreign grid:
 authentic photos cropped off-grid and saved again at quality 98 keep the old
 grid as main grid, and the file's own grid then forms "foreign" regions over
 much of the frame.
+
+Foreign regions that processing of the whole photo explains are published
+as that processing (``details["processing"]``), not as evidence: a first
+grid found all over the frame besides the main one, as a crop after a first
+compression leaves (:mod:`.earlier_grid`), and first grids shifted along
+each radius by one profile, as a lens correction leaves (:mod:`.resampling`).
+Regions neither explains stay foreign.
 """
 
 from __future__ import annotations
@@ -43,6 +50,7 @@ from scipy import ndimage
 
 from forensics_core import PROCESSING_KEY, DetectorResult, Evidence, Processing, Status
 
+from .earlier_grid import CELLS, LEAD, MIN_CELL_SHARE, MIN_CELL_SHARE_ALL, EarlierGrid, earlier_grid
 from .lattice import FREQUENCIES, MIN_FREQUENCIES, block_any, block_coefficients, estimate_steps, missing_regions, \
     off_lattice
 from .luminance import MIN_SIDE, Luminance, luminance
@@ -128,13 +136,14 @@ def _region_tiles(labels: np.ndarray, region: Region, cell: int) -> np.ndarray:
 
 def _region_record(i: int, stage: str, region: Region, tiles: np.ndarray, cell: int, shape: tuple[int, int],
                    log10_threshold: float, explained: bool = False) -> dict[str, Any]:
+    """One region as published; ``stage`` is ``"resampled"`` or ``"cropped"`` when processing explains it."""
     dx, dy = grid_origin(region.grid)
     x0, y0, x1, y1 = region.bbox
     bbox_area = (x1 - x0 + 1) * (y1 - y0 + 1)
     log10_nfa = finite_log10(region.log10_nfa)
     return {
         "id": i,
-        "stage": "resampled" if explained else stage,
+        "stage": stage,
         "grid": [dx, dy],
         "bbox_px": [x0, y0, x1 + 1, y1 + 1],
         "pixels": region.n_pixels,
@@ -219,16 +228,27 @@ def _votes_of(y: np.ndarray) -> np.ndarray:
 
 
 def _processing_text(processing: dict[str, Any] | None) -> str:
-    """The processing the grid shows, as a sentence for the summary (empty when none)."""
+    """The processing the grid shows, as sentences for the summary (empty when none)."""
     if not processing:
         return ""
-    profile = processing["profile_px"]
-    radii = [p["radius_px"] for p in profile]
-    shifts = [abs(p["shift_px"]) for p in profile]
-    return (f" The photo was resampled by a radial warp about its centre after a first JPEG compression, as lens "
-            f"correction does: {len(profile)} regions at {min(radii):.0f}-{max(radii):.0f} px from the centre vote "
-            f"for the main grid moved {processing['direction']} along their own radius by {min(shifts):.0f}-"
-            f"{max(shifts):.0f} px. That is processing, not a pasted piece.")
+    out = ""
+    crop = processing.get("crop")
+    if crop:
+        dx, dy = crop["grid"]
+        out += (f" The photo was cropped off the block grid (or shifted) after a first JPEG compression and saved "
+                f"again: that compression's grid, at ({dx}, {dy}), leads the votes in {crop['cells_led']} of "
+                f"{crop['cells']} parts of the frame, not in one place; its {crop['n_regions']} regions are that "
+                f"history, not a pasted piece.")
+    warp = processing.get("radial")
+    if warp:
+        profile = warp["profile_px"]
+        radii = [p["radius_px"] for p in profile]
+        shifts = [abs(p["shift_px"]) for p in profile]
+        out += (f" The photo was resampled by a radial warp about its centre after a first JPEG compression, as "
+                f"lens correction does: {warp['n_regions']} regions at {min(radii):.0f}-{max(radii):.0f} px from "
+                f"the centre vote for the first grid moved {warp['direction']} along their own radius by "
+                f"{min(shifts):.0f}-{max(shifts):.0f} px. That is processing, not a pasted piece.")
+    return out
 
 
 def _summary(details: dict[str, Any]) -> str:
@@ -236,7 +256,12 @@ def _summary(details: dict[str, Any]) -> str:
     dx, dy = main["origin"]
     hits = [r for r in details["regions"] if r["meaningful"]]
     more = f" and {len(hits) - 1} more" if len(hits) > 1 else ""
+    processing = _processing_text(details.get(PROCESSING_KEY))
     if not main["significant"]:
+        if not hits and processing:
+            return (f"No JPEG block grid is significant over the whole photo (best origin ({dx}, {dy}), NFA "
+                    f"{nfa_text(main['log10_nfa'])}), and every region voting for one is explained by "
+                    f"processing.{processing}")
         if not hits:
             return (f"Inconclusive: no JPEG block grid is significant (best origin ({dx}, {dy}), NFA "
                     f"{nfa_text(main['log10_nfa'])}) and no region votes for one; the photo was never "
@@ -250,10 +275,10 @@ def _summary(details: dict[str, Any]) -> str:
                 f"piece of a JPEG pasted into an uncompressed image does.")
     crop = (" The main grid is not at (0, 0): the photo was probably cropped after compression."
             if details["cropped"] else "")
-    crop += _processing_text(details.get(PROCESSING_KEY))
+    crop += processing
     lead = f"Main JPEG grid at origin ({dx}, {dy}) (NFA {nfa_text(main['log10_nfa'])})"
     if not hits:
-        candidates = [r for r in details["regions"] if r["stage"] != "resampled"]
+        candidates = [r for r in details["regions"] if r["stage"] not in ("resampled", "cropped")]
         best = candidates[0]["log10_nfa"] if candidates else None
         tail = "" if best is None else f" (strongest candidate NFA {nfa_text(best)})"
         return f"{lead}; no region votes significantly for another grid{tail}.{crop}"
@@ -276,22 +301,44 @@ def _summary(details: dict[str, Any]) -> str:
             f"is.{crop}")
 
 
-def _processing(warp: RadialWarp, records: list[dict[str, Any]]) -> dict[str, Any]:
-    """The radial resampling as processing: what it is, the regions it explains and its sampled profile."""
-    return {
-        **Processing("radial resampling", "resampled by a radial warp about its centre after a first JPEG "
-                     "compression, as lens correction does").to_details(),
-        "direction": "outwards" if warp.at_corner_px > 0 else "inwards",
-        "profile_terms_px": [round(t, 2) for t in warp.terms],
-        "n_regions": len(warp.explained),
-        "region_ids_listed": [r["id"] for r in records if r["stage"] == "resampled"],
-        "shift_at_half_diagonal_px": round(warp.at_corner_px, 2),
-        "profile_px": [{"radius_px": r, "shift_px": round(m, 2)} for r, m in warp.profile],
-        "rule": (f"at least {MIN_REGIONS} regions in directions at least {MIN_SPREAD_DEG:g} degrees apart whose "
-                 f"grids are the main grid shifted, modulo 8, along their own radius (within {PERP_TOL:g} px) by one "
-                 f"radial profile D(r) = a (r / R)^3 + b (r / R), R the half diagonal (within {PROFILE_TOL:g} px or "
-                 f"{100 * PROFILE_REL:g} %)"),
-    }
+def _processing(warp: RadialWarp | None, n_warped: int, earlier: EarlierGrid | None, n_cropped: int,
+                records: list[dict[str, Any]]) -> dict[str, Any] | None:
+    """The processing the regions show: what it is, the regions it explains and its evidence (None when none)."""
+    if warp is None and earlier is None:
+        return None
+    done = []
+    out: dict[str, Any] = {}
+    if earlier is not None:
+        done.append("cropped off the block grid after a first JPEG compression and saved again")
+        out["crop"] = {
+            "grid": list(grid_origin(earlier.grid)),
+            "cells_led": earlier.cells_led,
+            "cells": earlier.cells,
+            "n_regions": n_cropped,
+            "region_ids_listed": [r["id"] for r in records if r["stage"] == "cropped"],
+            "rule": (f"a grid other than the main one that, its regions and their surroundings set aside, leads the "
+                     f"other non-main grids' votes by {LEAD:g} times in at least {100 * MIN_CELL_SHARE:g} % of a "
+                     f"{CELLS} x {CELLS} partition of the frame, or with its regions in at least "
+                     f"{100 * MIN_CELL_SHARE_ALL:g} %"),
+        }
+    if warp is not None:
+        done.append("resampled by a radial warp about its centre after a first JPEG compression, as lens "
+                    "correction does")
+        out["radial"] = {
+            "direction": "outwards" if warp.at_corner_px > 0 else "inwards",
+            "first_grid_origin": list(warp.origin),
+            "profile_terms_px": [round(t, 2) for t in warp.terms],
+            "n_regions": n_warped,
+            "region_ids_listed": [r["id"] for r in records if r["stage"] == "resampled"],
+            "shift_at_half_diagonal_px": round(warp.at_corner_px, 2),
+            "profile_px": [{"radius_px": r, "shift_px": round(m, 2)} for r, m in warp.profile],
+            "rule": (f"at least {MIN_REGIONS} regions in directions at least {MIN_SPREAD_DEG:g} degrees apart whose "
+                     f"grids are the first grid shifted, modulo 8, along their own radius (within {PERP_TOL:g} px) "
+                     f"by one radial profile D(r) = a (r / R)^3 + b (r / R), "
+                     f"R the half diagonal (within {PROFILE_TOL:g} px or {100 * PROFILE_REL:g} %)"),
+        }
+    kind = " and ".join(k for k, x in (("crop after compression", earlier), ("radial resampling", warp)) if x)
+    return {**Processing(kind, "; and ".join(done)).to_details(), **out}
 
 
 def analyse_luminance(lum: Luminance, params: Mapping[str, Any],
@@ -400,20 +447,27 @@ def analyse_luminance(lum: Luminance, params: Mapping[str, Any],
     found.sort(key=lambda f: f[1].log10_nfa)
     meaningful = [f for f in found if f[1].log10_nfa < log10_threshold]
     foreign = [f for f in meaningful if f[0] == "foreign"]
-    warp = radial_warp([f[1] for f in foreign], grid_origin(main), shape) if significant else None
-    explained = [] if warp is None else [foreign[i] for i in warp.explained]
-    explained_ids = {id(f) for f in explained}
+    earlier = earlier_grid(votes, main, [f[1] for f in foreign], totals) if significant else None
+    cropped = set() if earlier is None else {id(foreign[i]) for i in earlier.explained}
+    rest = [f for f in foreign if id(f) not in cropped]
+    # A camera's first grid is the file's own unless the photo was cropped; without a main grid, as at quality
+    # 100 where the file's own compression leaves few zeros, it is the only candidate.
+    origins = ([grid_origin(main)] if significant else []) + ([(0, 0)] if lum.jpeg else [])
+    warp = radial_warp([f[1] for f in rest], origins, shape) if origins else None
+    warped = set() if warp is None else {id(rest[i]) for i in warp.explained}
+    explained_ids = cropped | warped
     evidence = [f for f in meaningful if id(f) not in explained_ids]
     # Without a detection, the strongest candidate is kept to show how far it was from one.
+    explained = [f for f in meaningful if id(f) in explained_ids]
     listed = (evidence + explained)[: int(params["max_regions_listed"])] if meaningful else found[:1]
-    is_explained = [id(f) in explained_ids for f in listed]
-    details["regions"] = [_region_record(i + 1, stage, r, tiles(), cell, shape, log10_threshold, x)
-                          for i, ((stage, r, tiles), x) in enumerate(zip(listed, is_explained))]
+    stages = ["cropped" if id(f) in cropped else "resampled" if id(f) in warped else f[0] for f in listed]
+    details["regions"] = [_region_record(i + 1, stage, f[1], f[2](), cell, shape, log10_threshold, stage != f[0])
+                          for i, (f, stage) in enumerate(zip(listed, stages))]
     details["n_meaningful"] = len(evidence)
-    details[PROCESSING_KEY] = None if warp is None else _processing(warp, details["regions"])
+    details[PROCESSING_KEY] = _processing(warp, len(warped), earlier, len(cropped), details["regions"])
     _timed(marks, "report_data", t)
     details["elapsed_s"] = marks
-    if not significant and not evidence:
+    if not significant and not evidence and warp is None:
         return DetectorResult(Status.INCONCLUSIVE, _summary(details), details=details)
     nfa = float(min(1.0, 10.0 ** details["regions"][0]["log10_nfa"])) if evidence else 1.0
     return DetectorResult(status=Status.OK, summary=_summary(details), score=1.0 - nfa, nfa=nfa, details=details)

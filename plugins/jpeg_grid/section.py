@@ -15,7 +15,8 @@ from .nfa import nfa_text
 _STAGE_WORDS = {
     "foreign": "own grid",
     "missing": "main grid missing",
-    "resampled": "main grid moved by a radial warp (processing)",
+    "resampled": "first grid moved by a radial warp (processing)",
+    "cropped": "first grid moved by a crop (processing)",
 }
 
 
@@ -27,6 +28,7 @@ def _region_rows(regions: list[dict[str, Any]]) -> list[dict[str, Any]]:
         "density": f"{100 * r['density']:.1f} %", "nfa": nfa_text(r["log10_nfa"]),
         "css": "line-flagged" if r["meaningful"] else "",
         "verdict": ("explained by the radial warp" if r["stage"] == "resampled" else
+                    "explained by the crop" if r["stage"] == "cropped" else
                     "meaningful" if r["meaningful"] else "not meaningful"),
     } for r in regions]
 

@@ -310,7 +310,7 @@ def test_lens_correction_is_named_processing_and_a_piece_pasted_into_it_is_still
     corrected = _lens_corrected(first, -0.08)
     result = analyse(load_evidence(_file(tmp_path, "corrected.jpg", synth.jpeg_bytes(corrected, 98))), DEFAULT_PARAMS)
     processing = result.details["processing"]
-    assert processing and processing["kind"] == "radial resampling" and processing["n_regions"] >= 2
+    assert processing and processing["kind"] == "radial resampling" and processing["radial"]["n_regions"] >= 2
     assert result.details["n_meaningful"] == 0 and result.nfa == 1.0
     assert "radial warp about its centre" in result.summary and "processing" in result.summary
     check_result(result)
@@ -327,3 +327,31 @@ def test_lens_correction_is_named_processing_and_a_piece_pasted_into_it_is_still
     foreign = [r for r in spliced.details["regions"] if r["meaningful"]]
     assert foreign and foreign[0]["grid"] == [3, 5] and foreign[0]["stage"] == "foreign"
     assert spliced.nfa < 1e-6
+
+
+def test_crop_after_compression_is_named_processing_and_a_piece_pasted_into_it_is_still_found(tmp_path):
+    """A JPEG cropped off its grid and saved again at quality 98 keeps its first grid, moved, all over the frame.
+
+    That grid, (3, 5) after cutting 5 columns and 3 rows, is the photo's
+    history: its region is explained as a crop, and the finding names the
+    processing. A piece of another JPEG pasted into the same photo on the
+    grid (6, 2) is still reported as foreign.
+    """
+    rng = np.random.default_rng(39)
+    first = synth.decode_cropped(synth.jpeg_bytes(synth.render_scene(rng, (900, 1200), synth.SOURCES[0]), 80))
+    cropped = np.ascontiguousarray(first[3:, 5:])
+    result = check_result(analyse(load_evidence(_file(tmp_path, "cropped.jpg", synth.jpeg_bytes(cropped, 98))),
+                                  DEFAULT_PARAMS))
+    d = result.details
+    assert d["main_grid"]["origin"] == [0, 0] and d["processing"]["kind"] == "crop after compression"
+    assert d["processing"]["crop"]["grid"] == [3, 5]
+    assert [r["stage"] for r in d["regions"]] == ["cropped"] and d["n_meaningful"] == 0 and result.nfa == 1.0
+    assert "cropped off the block grid" in result.summary
+
+    donor = synth.decode_cropped(synth.jpeg_bytes(synth.render_scene(rng, (900, 1200), "coffee"), 80, (6, 2)), (6, 2))
+    pasted = cropped.copy()
+    pasted[300:560, 400:700] = donor[300:560, 400:700]
+    spliced = analyse(load_evidence(_file(tmp_path, "spliced.jpg", synth.jpeg_bytes(pasted, 98))), DEFAULT_PARAMS)
+    foreign = [r for r in spliced.details["regions"] if r["meaningful"]]
+    assert foreign and foreign[0]["grid"] == [6, 2] and foreign[0]["stage"] == "foreign"
+    assert spliced.details["processing"]["crop"]["grid"] == [3, 5] and spliced.nfa < 1e-6

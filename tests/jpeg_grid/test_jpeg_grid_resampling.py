@@ -1,0 +1,41 @@
+"""The radial warp that explains regions on shifted grids: lens correction after a first compression."""
+
+import numpy as np
+
+from forensics_plugins.jpeg_grid.regions import Region
+from forensics_plugins.jpeg_grid.resampling import radial_warp
+from forensics_plugins.jpeg_grid.votes import grid_code
+
+SHAPE = (2000, 3000)
+
+
+def _region(label: int, angle_deg: float, rho: float, shift_px: float, origin=(0, 0)) -> Region:
+    """A region at ``rho`` half diagonals from the centre whose grid is ``origin`` moved ``shift_px`` along its radius."""
+    centre = np.array([(SHAPE[1] - 1) / 2, (SHAPE[0] - 1) / 2])
+    u = np.array([np.cos(np.radians(angle_deg)), np.sin(np.radians(angle_deg))])
+    x, y = centre + rho * np.hypot(*centre) * u
+    dx, dy = np.round(origin + shift_px * u).astype(int)
+    return Region(label, grid_code(int(dx), int(dy)), 500, (int(x) - 20, int(y) - 20, int(x) + 20, int(y) + 20),
+                  -10.0 - label)
+
+
+def test_regions_in_one_band_establish_the_warp():
+    # The old grid survives best where the shift is near whole pixels: every region at 0.57 half diagonals,
+    # 18 px out. Two regions this close in distance cannot fix a two-term profile; one term through one does.
+    regions = [_region(i, angle, 0.57, 18.0) for i, angle in enumerate(range(0, 360, 45))]
+    # In one band a grid shows the shift modulo 8 only: 18 px out also reads as about 14 px in.
+    warp = radial_warp(regions, [(0, 0)], SHAPE)
+    assert warp is not None and len(warp.explained) == len(regions)
+
+
+def test_the_first_grid_may_be_the_files_own_when_the_main_grid_is_another():
+    regions = [_region(i, angle, 0.4 + 0.05 * i, 6.0 + 10 * (0.4 + 0.05 * i) ** 3) for i, angle in
+               enumerate(range(10, 360, 60))]
+    warp = radial_warp(regions, [(4, 4), (0, 0)], SHAPE)
+    assert warp is not None and len(warp.explained) == len(regions)
+
+
+def test_two_regions_or_regions_in_one_direction_are_not_a_warp():
+    assert radial_warp([_region(0, 0, 0.5, 9.0), _region(1, 120, 0.6, 11.0)], [(0, 0)], SHAPE) is None
+    one_side = [_region(i, 10 + 5 * i, 0.5 + 0.03 * i, 9.0) for i in range(5)]
+    assert radial_warp(one_side, [(0, 0)], SHAPE) is None
