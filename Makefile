@@ -58,10 +58,12 @@ validate-lens-splices: $(if $(wildcard $(REAL)),bytecode)
 # correction, rotation, keystone, crop, resizing, levels, sharpening, noise
 # reduction, platform re-encodes, PNG export), all authentic, made into
 # $(OUT)/validation-innocent-processing/cases: the detectors' false alarms on
-# innocent processing; nothing is shipped. No corpus, nothing to build.
+# innocent processing. Its record (figures, hashes and recipes, no photo) is
+# shipped for the report's error-rate section. No corpus, nothing to build.
 validate-innocent-processing: $(if $(wildcard $(REAL)),bytecode)
 	@if [ ! -d "$(REAL)" ]; then echo "the real corpus is absent ($(REAL)): no processed photos built"; exit 0; fi; \
 	$(PY) -m forensics_core validate innocent-processing --corpus "$(REAL)" --out $(OUT)/validation-innocent-processing && \
+	cp $(OUT)/validation-innocent-processing/validation.json forensics_core/validation/innocent_processing.json && \
 	echo "page: $(OUT)/validation-innocent-processing/validation.html; cases and recipes: $(OUT)/validation-innocent-processing/cases/"
 
 # Likelihood-ratio calibrators fitted on the shipped real record (refresh it

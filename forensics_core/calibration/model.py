@@ -63,8 +63,13 @@ SHIPPED = "real.json"
 FEATURE_CAP = 30.0
 _P_FLOOR = 1e-300
 
-HP = "after capture, content was inserted, moved or removed"
-HD = "the photo is as the camera produced it, with any recompression or resizing the findings describe"
+HP = "after capture, content was inserted, moved or removed in part of the photo"
+# Hd is what an examiner must hold against Hp: editors and platforms process whole photos, and a
+# detector's null is checked on such photos (forensics validate innocent-processing), not on camera
+# originals only.
+HD = ("the photo is as the camera produced it, or that photo after processing of the whole frame that changes "
+      "no content (recompression, resizing, cropping, rotation, lens or perspective correction, tone and colour "
+      "adjustment, sharpening, noise reduction)")
 
 
 class CalibrationError(Exception):

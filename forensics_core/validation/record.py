@@ -28,6 +28,9 @@ SHIPPED = "synthetic.json"
 """The record of the built-in synthetic suite shipped in ``forensics_core/validation/`` (``make validate``)."""
 SHIPPED_REAL = "real.json"
 """The record of the real-photo corpus shipped beside it (``make validate-real``)."""
+SHIPPED_INNOCENT = "innocent_processing.json"
+"""The record of the innocent-processing suite shipped beside them (``make validate-innocent-processing``):
+the false alarms of every detector and of the verdict on processed authentic photos."""
 
 FOUND_IOU = 0.5
 
@@ -194,7 +197,7 @@ def read_record(path: Path) -> ValidationRecord:
 
 
 def shipped_record(name: str = SHIPPED) -> ValidationRecord | None:
-    """The record ``name`` (:data:`SHIPPED` or :data:`SHIPPED_REAL`) shipped with this release, or None when absent."""
+    """The record ``name`` (:data:`SHIPPED`, :data:`SHIPPED_REAL` or :data:`SHIPPED_INNOCENT`) shipped with this release, or None when absent."""
     resource = files(__package__).joinpath(name)
     if not resource.is_file():
         return None
