@@ -35,6 +35,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -145,38 +146,66 @@ def _link(xy: np.ndarray, normal: np.ndarray, pixel: np.ndarray, width: int, max
     ok = np.einsum("ij,ij->i", normal[dst], n_src) >= np.cos(np.deg2rad(max_link_deg))
     ok &= np.abs(along) > np.abs(across)
     dist = np.hypot(d[:, 0], d[:, 1])
-    # One column per neighbour position, so the nearest is an argmin, not a sort.
+    # A point has at most one candidate per neighbour position: the nearest is a running minimum over the
+    # positions in order (the first position wins a tie), with no N x 9 table.
     step = pixel[dst] - pixel[src]
-    slot = (step[:, 0] + 1) * 3 + step[:, 1] + 1
+    slot = ((step[:, 0] + 1) * 3 + step[:, 1] + 1).astype(np.int8)
     rows = np.arange(n_pts)
     nearest = []
     for side in (ok & (along > 0), ok & (along < 0)):
-        cost = np.full((n_pts, 9), np.inf)
-        cost[src[side], slot[side]] = dist[side]
-        target = np.full((n_pts, 9), -1, dtype=np.int64)
-        target[src[side], slot[side]] = dst[side]
-        nearest.append(target[rows, np.argmin(cost, axis=1)])
+        s_src, s_dst, s_dist, s_slot = src[side], dst[side], dist[side], slot[side]
+        by_slot = np.argsort(s_slot, kind="stable")
+        bounds = np.searchsorted(s_slot[by_slot], np.arange(10))
+        best = np.full(n_pts, np.inf)
+        target = np.full(n_pts, -1, dtype=np.int64)
+        for k in range(9):
+            sel = by_slot[bounds[k]: bounds[k + 1]]
+            better = s_dist[sel] < best[s_src[sel]]
+            best[s_src[sel][better]] = s_dist[sel][better]
+            target[s_src[sel][better]] = s_dst[sel][better]
+        nearest.append(target)
     ahead, behind = nearest
     mutual = (ahead >= 0) & (behind[np.maximum(ahead, 0)] == rows)
     return np.where(mutual, ahead, -1)
 
 
+@nb.njit(cache=True)
+def _walk(succ, has_pred):
+    n = succ.size
+    tail = np.full(n, -1, np.int64)
+    dist = np.zeros(n, np.int64)
+    chain = np.empty(n, np.int64)
+    for head in range(n):
+        if has_pred[head]:
+            continue
+        m = 0
+        v = head
+        while True:
+            chain[m] = v
+            m += 1
+            if succ[v] < 0:
+                break
+            v = succ[v]
+        for q in range(m):
+            tail[chain[q]] = chain[m - 1]
+            dist[chain[q]] = m - 1 - q
+    return tail, dist
+
+
 def _rank(succ: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Pointer jumping: tail of each node's chain and its distance to the tail.
+    """Tail of each node's chain and its distance to the tail, by walking each chain from its head once.
 
     Returns
     -------
     tail, dist : ndarray, shape (N,), int64
+        Meaningful where not ``cyclic``.
     cyclic : ndarray, shape (N,), bool
-        Nodes on a closed chain, which never reach a tail.
+        Nodes on a closed chain, which has no head and never reaches a tail.
     """
-    n = succ.shape[0]
-    nxt = np.where(succ >= 0, succ, np.arange(n))
-    dist = (succ >= 0).astype(np.int64)
-    for _ in range(max(1, int(np.ceil(np.log2(n + 1))))):
-        dist = dist + dist[nxt]
-        nxt = nxt[nxt]
-    return nxt, dist, succ[nxt] >= 0
+    has_pred = np.zeros(succ.shape[0], dtype=bool)
+    has_pred[succ[succ >= 0]] = True
+    tail, dist = _walk(succ, has_pred)
+    return tail, dist, tail < 0
 
 
 def _break_cycles(succ: np.ndarray, cyclic: np.ndarray) -> np.ndarray:
@@ -420,14 +449,21 @@ def _split_pieces(xy, p, starts, tolerance_px, max_rms_px, max_k1, scale_px, min
     """
     starts = starts.copy()
     keep = _drop_short(starts, min_points)
+    # A segment that fits is never split, so each round refits only the pieces of the last round's splits.
+    pending = keep.copy()
     for _ in range(_SPLIT_ROUNDS):
-        idx = np.flatnonzero(keep)
+        idx = np.flatnonzero(pending)
+        if idx.size == 0:
+            break
         _, _, worst = _fit_segments(p[idx], starts[idx], max_k1, scale_px)
         bad = worst > tolerance_px
+        pending[idx] = bad[np.cumsum(starts[idx]) - 1]
         if not bad.any():
             break
         starts[idx[_farthest_from_chord(xy[idx], starts[idx], bad)]] = True
-        keep[idx] &= _drop_short(starts[idx], min_points)
+        long_enough = _drop_short(starts[idx], min_points)
+        keep[idx] &= long_enough
+        pending[idx] &= long_enough
     idx = np.flatnonzero(keep)
     fit, _, worst = _fit_segments(p[idx], starts[idx], max_k1, scale_px)
     seg = np.cumsum(starts[idx]) - 1
@@ -489,13 +525,15 @@ def _open_pairs(g: _Groups, pairs: np.ndarray) -> np.ndarray:
 def _group_pairs(g: _Groups, pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Distinct group pairs ``a < b`` of the end pairs, with their smallest end gap."""
     ga, gb = g.label[pairs[:, 0] // 2], g.label[pairs[:, 1] // 2]
-    a, b = np.minimum(ga, gb), np.maximum(ga, gb)
+    n = np.int64(g.pieces.size)
+    # One integer key per group pair: a single sort, then the smallest gap of each run of equal keys.
+    key = np.minimum(ga, gb).astype(np.int64) * n + np.maximum(ga, gb)
     gap = np.hypot(*(g.end_xy[pairs[:, 0]] - g.end_xy[pairs[:, 1]]).T)
-    order = np.lexsort((gap, b, a))
-    a, b, gap = a[order], b[order], gap[order]
-    first = np.ones(a.size, dtype=bool)
-    first[1:] = (a[1:] != a[:-1]) | (b[1:] != b[:-1])
-    return a[first], b[first], gap[first]
+    order = np.argsort(key)
+    key = key[order]
+    first = np.flatnonzero(np.concatenate(([True], key[1:] != key[:-1])))
+    key = key[first]
+    return key // n, key % n, np.minimum.reduceat(gap[order], first)
 
 
 def _roughly_aligned(g: _Groups, a, b, gap, rule: _GatherRule) -> np.ndarray:
