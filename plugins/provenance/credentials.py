@@ -22,13 +22,16 @@ import c2pa
 
 MIME_TYPES = {"JPEG": "image/jpeg", "MPO": "image/jpeg", "PNG": "image/png", "TIFF": "image/tiff",
               "WEBP": "image/webp", "HEIF": "image/heif", "AVIF": "image/avif"}
-# Codes of the C2PA validation status that mean the content or the claim
-# changed after signing (spec section 15.2), as opposed to trust or
-# informational codes.
+# Codes of the C2PA validation status that mean the content changed after
+# signing: the hard binding no longer matches (spec section 15.2).
 _BINDING = ("assertion.dataHash.mismatch", "assertion.bmffHash.mismatch", "assertion.boxesHash.mismatch",
             "assertion.collectionHash.mismatch")
-_INTEGRITY = ("claimSignature.mismatch", "assertion.hashedURI.mismatch", "claim.missing", "claim.multiple",
-              "assertion.missing")
+# Codes about the signer's credential and time stamp, not the claim: the
+# signature cannot vouch for the content, which is not shown to have changed.
+# Without the examiner's trust anchors every signer is "untrusted", which the
+# SDK still calls Valid.
+_CREDENTIAL_PREFIXES = ("signingCredential.", "timeStamp.")
+_UNTRUSTED = "signingCredential.untrusted"
 AI_SOURCE_TYPES = ("trainedAlgorithmicMedia", "compositeWithTrainedAlgorithmicMedia", "algorithmicMedia",
                    "compositeSynthetic")
 
@@ -40,13 +43,22 @@ class Credentials:
     Attributes
     ----------
     state : str
-        c2pa's validation state: ``Invalid``, ``Valid`` (signatures and
-        bindings hold, signer not on a trust list) or ``Trusted``.
+        The SDK's own validation state: ``Invalid``, ``Valid`` (signatures
+        and bindings hold, signer not on a trust list) or ``Trusted``. The
+        finding never calls credentials valid that the SDK does not.
     binding_broken, integrity_broken : bool
-        A hard-binding hash no longer matches the content; the claim or its
-        signature does not match itself.
+        A hard-binding hash no longer matches the content; the claim, its
+        assertions or its signature do not match themselves (every failure
+        code of the active manifest that is not about the binding or the
+        signer's credential).
     failures : list of dict
-        Every failure code with its explanation.
+        Every failure code of the active manifest with its explanation.
+    credential_failures : list of str
+        Failure codes about the signing credential or time stamp (expired,
+        revoked, invalid), but ``signingCredential.untrusted``.
+    ingredient_failures : list of dict
+        ``ingredient`` (the ingredient assertion's URI) and ``codes``: each
+        ingredient whose own credentials fail validation.
     manifests : int
         Manifests in the store (the active one and its ingredients').
     claim_generator : str
@@ -74,6 +86,8 @@ class Credentials:
     ingredients: list[dict[str, Any]]
     source_types: list[str] = field(default_factory=list)
     sidecar: bool = False
+    credential_failures: list[str] = field(default_factory=list)
+    ingredient_failures: list[dict[str, Any]] = field(default_factory=list)
 
 
 def _context(trust_anchors: str | None) -> c2pa.Context:
@@ -102,6 +116,17 @@ def _actions(manifest: dict[str, Any]) -> list[dict[str, Any]]:
     return out
 
 
+def _ingredient_failures(ingredient: dict[str, Any]) -> list[str]:
+    """The failure codes an ingredient's own credentials had when it was taken in, as its assertion records them.
+
+    Older manifests list them as ``validation_status``, newer ones as
+    ``validation_results``; a missing signer trust is not counted.
+    """
+    listed = ingredient.get("validation_status") or []
+    recorded = ((ingredient.get("validation_results") or {}).get("activeManifest") or {}).get("failure") or []
+    return sorted({str(f.get("code", "")) for f in [*listed, *recorded] if isinstance(f, dict)} - {_UNTRUSTED})
+
+
 def read(data: bytes, fmt: str, sidecar: bytes | None = None, trust_anchors: str | None = None) -> Credentials | None:
     """The Content Credentials of a file's bytes, or None when it carries none.
 
@@ -112,7 +137,8 @@ def read(data: bytes, fmt: str, sidecar: bytes | None = None, trust_anchors: str
     fmt : str
         ``EvidenceInfo.format``.
     sidecar : bytes, optional
-        A detached manifest store (``photo.c2pa``) to validate against ``data``.
+        A detached manifest store (``photo.c2pa``) to validate against
+        ``data`` instead of the store embedded in it: read the two apart.
     trust_anchors : str, optional
         PEM certificates the examiner trusts as roots; without them a valid
         signature is ``Valid`` but never ``Trusted``.
@@ -136,13 +162,25 @@ def read(data: bytes, fmt: str, sidecar: bytes | None = None, trust_anchors: str
     failures = [{"code": str(f.get("code", "")), "explanation": str(f.get("explanation", ""))}
                 for f in (results.get("activeManifest") or {}).get("failure") or []]
     codes = {f["code"] for f in failures}
+    credential = {c for c in codes if c.startswith(_CREDENTIAL_PREFIXES)}
+    deltas = [{"ingredient": str(d.get("ingredientAssertionURI", "")),
+               "codes": sorted({str(f.get("code", "")) for f in (d.get("validationDeltas") or {}).get("failure") or []}
+                               - {_UNTRUSTED})}
+              for d in results.get("ingredientDeltas") or [] if isinstance(d, dict)]
+    # Only what the SDK itself calls invalid is read as a claim that no longer matches: a failure of the active
+    # manifest that is neither the binding nor the signer's credential, or of an ingredient validated now.
+    delta_codes = {c for d in deltas for c in d["codes"]}
+    structural = (codes - credential - set(_BINDING)) | delta_codes if state not in ("Valid", "Trusted") else set()
     actions = _actions(active)
     types = [a["digitalSourceType"] for a in actions if a["digitalSourceType"]]
     ingredients = [{"title": i.get("title"), "relationship": i.get("relationship"), "format": i.get("format")}
                    for i in active.get("ingredients") or []]
+    deltas += [{"ingredient": str(i.get("title") or "untitled"), "codes": _ingredient_failures(i)}
+               for i in active.get("ingredients") or [] if isinstance(i, dict)]
     signature = active.get("signature_info") or {}
     return Credentials(
-        state=state, binding_broken=bool(codes & set(_BINDING)), integrity_broken=bool(codes & set(_INTEGRITY)),
+        state=state, binding_broken=bool(codes & set(_BINDING)), integrity_broken=bool(structural),
         failures=failures, manifests=len(store.get("manifests") or {}), claim_generator=_generator(active),
         signer={k: signature.get(k) for k in ("issuer", "common_name", "cert_serial_number", "alg", "time")},
-        actions=actions, ingredients=ingredients, source_types=sorted(set(types)), sidecar=sidecar is not None)
+        actions=actions, ingredients=ingredients, source_types=sorted(set(types)), sidecar=sidecar is not None,
+        credential_failures=sorted(credential - {_UNTRUSTED}), ingredient_failures=[d for d in deltas if d["codes"]])

@@ -11,6 +11,10 @@ most photos carry none. The finding states no p-value (there is no
 validation data with credentials yet); its ``score`` is 1 for a broken
 binding or claim, 0.5 for valid credentials that declare an edit, a
 composition or a generative source, 0 for valid credentials of a capture.
+Credentials are called valid only when the C2PA SDK's own validation state
+is ``Valid`` or ``Trusted``; an expired, revoked or otherwise invalid
+signing credential with an intact binding makes the finding inconclusive
+(the signature cannot vouch for the content, nor show it changed).
 """
 
 from __future__ import annotations
@@ -39,18 +43,33 @@ def _sidecar(evidence: Evidence, params: Mapping[str, Any]) -> tuple[bytes | Non
     path = evidence.path.with_suffix(".c2pa")
     if not params["read_sidecar"] or not path.is_file() or path.stat().st_size > int(params["max_sidecar_bytes"]):
         return None, None
-    data = path.read_bytes()
+    with path.open("rb") as f:
+        data = f.read(int(params["max_sidecar_bytes"]) + 1)
+    if len(data) > int(params["max_sidecar_bytes"]):
+        return None, None
     return data, hashlib.sha256(data).hexdigest()
 
 
-def _summary(cred: Credentials, edited: list[str]) -> tuple[str, float]:
+def _codes(codes: list[str]) -> str:
+    return ", ".join(codes[:4]) + (f" and {len(codes) - 4} more" if len(codes) > 4 else "")
+
+
+def _summary(cred: Credentials, edited: list[str]) -> tuple[str, float | None]:
+    """The finding's sentence and score; score None when the credentials cannot vouch for the content either way."""
     who = cred.signer.get("common_name") or "an unnamed signer"
     by = f"signed by {who} (issuer {cred.signer.get('issuer') or 'not stated'}), made by {cred.claim_generator}"
+    codes = [f["code"] for f in cred.failures if f["code"] != "signingCredential.untrusted"]
+    codes += [c for d in cred.ingredient_failures for c in d["codes"] if c not in codes]
     if cred.binding_broken or cred.integrity_broken:
-        what = "the content's hash no longer matches the one signed" if cred.binding_broken else \
-            "the claim no longer matches its signature"
-        return (f"Content Credentials {by}, but {what}: the file changed after it was signed (its content, or "
-                f"only its metadata).", 1.0)
+        what = ("the content's hash no longer matches the one signed" if cred.binding_broken else
+                "the claim or its assertions no longer match what was signed")
+        return (f"Invalid Content Credentials {by}: {what} ({_codes(codes)}). The file changed after it was signed "
+                f"(its content, or only its metadata or manifest); what changed, and whether content was "
+                f"inserted, moved or removed, the credentials cannot say.", 1.0)
+    if cred.state not in ("Valid", "Trusted"):
+        problems = cred.credential_failures or codes or ["no failure code given but an untrusted signer"]
+        return (f"Invalid Content Credentials {by}: the C2PA SDK does not validate them ({_codes(problems)}). The "
+                f"signature cannot vouch for the content; that alone is no evidence that the content changed.", None)
     trust = "signer on the examiner's trust list" if cred.state == "Trusted" else \
         "signer identity not checked against a trust list"
     ai = [t for t in cred.source_types if t in AI_SOURCE_TYPES]
@@ -66,15 +85,47 @@ def _summary(cred: Credentials, edited: list[str]) -> tuple[str, float]:
             f"show that the scene was real or that the signer is honest.", 0.0)
 
 
+def _ingredients_text(cred: Credentials) -> str:
+    bad = cred.ingredient_failures
+    if not bad:
+        return ""
+    return (f" {len(bad)} ingredient(s) carry credentials that fail validation ({_codes(bad[0]['codes'])}): what "
+            f"they declare of the ingredient's own history cannot be relied on.")
+
+
+def _read(evidence: Evidence, sidecar: bytes | None, anchors: str | None) -> tuple[Credentials | None, str | None]:
+    """One manifest store (the file's own, or the sidecar's when given) and the error that kept it unread, if any."""
+    try:
+        return read(evidence.data, evidence.info.format, sidecar, anchors), None
+    except c2pa.C2paError as exc:
+        return None, str(exc).splitlines()[0][:300] if str(exc) else type(exc).__name__
+
+
+def _beside(side: Credentials | None, error: str | None) -> str:
+    """What the sidecar beside a photo with its own store holds, as a sentence (empty without one)."""
+    if error:
+        return f" The .c2pa file beside the photo cannot be read ({error}); that is a fault of that file, not of the photo."
+    if side is None:
+        return ""
+    state = "validates" if side.state in ("Valid", "Trusted") and not side.binding_broken else \
+        f"does not validate against the photo ({_codes([f['code'] for f in side.failures] or [side.state])})"
+    return f" The .c2pa file beside the photo holds another manifest store, which {state}."
+
+
 def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
-    """Read and validate the photo's Content Credentials.
+    """Read and validate the photo's Content Credentials, those it embeds and those of a sidecar beside it.
+
+    The embedded store, when there is one, is the finding's; a ``.c2pa``
+    sidecar is validated against the same bytes beside it, never instead of
+    it, and a sidecar that cannot be read is reported as such.
 
     Returns
     -------
     DetectorResult
-        ``inconclusive`` without credentials, or when the manifest store
-        cannot be parsed; otherwise ``ok`` with the score of the module
-        docstring and no p-value.
+        ``inconclusive`` without credentials, when the store cannot be read
+        or when the SDK does not validate credentials whose binding holds
+        (an expired or revoked signer); otherwise ``ok`` with the score of
+        the module docstring and no p-value.
     """
     sidecar, sidecar_sha = _sidecar(evidence, params)
     anchors_file = str(params["trust_anchors_file"])
@@ -82,16 +133,26 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
     details: dict[str, Any] = {"c2pa": f"{version('c2pa-python')} (c2pa-rs {c2pa.sdk_version()})",
                                "sidecar_sha256": sidecar_sha,
                                "trust_anchors_sha256": anchors and hashlib.sha256(anchors.encode()).hexdigest()}
-    try:
-        cred = read(evidence.data, evidence.info.format, sidecar, anchors)
-    except c2pa.C2paError as exc:
-        details["error"] = str(exc).splitlines()[0][:300] if str(exc) else type(exc).__name__
+    own, own_error = _read(evidence, None, anchors)
+    side, side_error = _read(evidence, sidecar, anchors) if sidecar is not None else (None, None)
+    if side_error:
+        details["sidecar_error"] = side_error
+    if own_error:
+        details["error"] = own_error
         return DetectorResult(Status.INCONCLUSIVE, "Inconclusive: the file carries a C2PA manifest store that cannot "
-                              f"be read ({details['error']}).", details=details)
+                              f"be read ({own_error}).{_beside(side, side_error)}", details=details)
+    cred = own or side
     if cred is None:
+        tail = (f" The .c2pa file beside it cannot be read ({side_error}); that is a fault of that file, not of the "
+                "photo.") if side_error else ""
         return DetectorResult(Status.INCONCLUSIVE, "Inconclusive: no Content Credentials. Most photos carry none; "
-                              "their absence says nothing about the content.", details=details)
+                              f"their absence says nothing about the content.{tail}", details=details)
     edited = sorted({a["action"] for a in cred.actions if a["action"] in EDITS})
     summary, score = _summary(cred, edited)
+    summary += _ingredients_text(cred) + (_beside(side, side_error) if own is not None else "")
     details.update(credentials=asdict(cred), edits=edited)
+    if own is not None and side is not None:
+        details["sidecar_credentials"] = asdict(side)
+    if score is None:
+        return DetectorResult(Status.INCONCLUSIVE, f"Inconclusive: {summary}", details=details)
     return DetectorResult(Status.OK, summary, score=score, details=details)

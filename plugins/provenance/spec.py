@@ -11,7 +11,7 @@ from typing import Any
 from forensics_core import DetectorSpec
 
 NAME = "provenance"
-VERSION = "1.0.0"
+VERSION = "1.1.0"
 REFERENCES = (
     "Coalition for Content Provenance and Authenticity, C2PA Technical Specification 2.1, 2024.",
     "Content Authenticity Initiative, c2pa-python (bindings of the c2pa-rs reference implementation).",

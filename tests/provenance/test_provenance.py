@@ -3,6 +3,7 @@
 import datetime
 import io
 import json
+import time
 
 import c2pa
 import numpy as np
@@ -31,15 +32,15 @@ def _usage(**set_):
     return x509.KeyUsage(**{**flags, **set_})
 
 
-@pytest.fixture(scope="module")
-def chain():
+def _make_chain(valid_for: datetime.timedelta) -> dict:
+    """A root and a signing certificate valid from a day ago for ``valid_for`` more (the root for 30 days)."""
     now = datetime.datetime.now(datetime.timezone.utc)
     root_key, key = ec.generate_private_key(ec.SECP256R1()), ec.generate_private_key(ec.SECP256R1())
 
-    def cert(subject, issuer, public, signing_key, serial, ca):
+    def cert(subject, issuer, public, signing_key, serial, ca, until):
         b = (x509.CertificateBuilder().subject_name(subject).issuer_name(issuer).public_key(public)
              .serial_number(serial).not_valid_before(now - datetime.timedelta(days=1))
-             .not_valid_after(now + datetime.timedelta(days=30))
+             .not_valid_after(until)
              .add_extension(x509.BasicConstraints(ca=ca, path_length=None), critical=True)
              .add_extension(_usage(key_cert_sign=True, crl_sign=True) if ca else _usage(digital_signature=True),
                             critical=True)
@@ -50,11 +51,17 @@ def chain():
                                 critical=False))
         return b.sign(signing_key, hashes.SHA256())
 
-    root = cert(_name("Tests Root CA"), _name("Tests Root CA"), root_key.public_key(), root_key, 1, True)
-    leaf = cert(_name("Tests Camera"), root.subject, key.public_key(), root_key, 2, False)
+    root = cert(_name("Tests Root CA"), _name("Tests Root CA"), root_key.public_key(), root_key, 1, True,
+                now + datetime.timedelta(days=30))
+    leaf = cert(_name("Tests Camera"), root.subject, key.public_key(), root_key, 2, False, now + valid_for)
     pem = serialization.Encoding.PEM
     return {"chain": leaf.public_bytes(pem) + root.public_bytes(pem), "root": root.public_bytes(pem).decode(),
             "key": key.private_bytes(pem, serialization.PrivateFormat.PKCS8, serialization.NoEncryption())}
+
+
+@pytest.fixture(scope="module")
+def chain():
+    return _make_chain(datetime.timedelta(days=30))
 
 
 def _photo() -> bytes:
@@ -63,11 +70,16 @@ def _photo() -> bytes:
     return buf.getvalue()
 
 
-def _sign(chain, actions, embed=True) -> tuple[bytes, bytes]:
+def _sign(chain, actions, embed=True, parent: bytes | None = None) -> tuple[bytes, bytes]:
+    """A photo signed with ``actions``, or, with ``parent``, as an edit of that signed photo."""
     signer = c2pa.Signer.from_info(c2pa.C2paSignerInfo(c2pa.C2paSigningAlg.ES256, chain["chain"], chain["key"], None))
     manifest = {"claim_generator_info": [{"name": "forensics-tests", "version": "1"}], "title": "photo.jpg",
-                "assertions": [{"label": "c2pa.actions", "data": {"actions": actions}}]}
+                "assertions": [{"label": "c2pa.actions", "data": {"actions": actions}}] if actions else []}
     builder = c2pa.Builder(json.dumps(manifest))
+    if parent is not None:
+        builder.set_intent(c2pa.C2paBuilderIntent.EDIT)
+        builder.add_ingredient(json.dumps({"title": "parent.jpg", "relationship": "parentOf"}), "image/jpeg",
+                               io.BytesIO(parent))
     if not embed:
         builder.set_no_embed()
     out = io.BytesIO()
@@ -107,7 +119,33 @@ def test_content_changed_after_signing_breaks_the_binding(tmp_path, chain):
     cred = r.details["credentials"]
     assert cred["state"] == "Invalid" and cred["binding_broken"]
     assert "assertion.dataHash.mismatch" in {f["code"] for f in cred["failures"]}
-    assert "changed after it was signed" in r.summary
+    assert "changed after it was signed" in r.summary and not r.summary.startswith("Valid")
+
+
+def test_an_expired_signing_credential_is_never_called_valid(tmp_path):
+    # The SDK calls these credentials Invalid (signingCredential.expired) although the binding holds.
+    signed, _ = _sign(_make_chain(datetime.timedelta(seconds=1)),
+                      [{"action": "c2pa.created", "digitalSourceType": CAPTURE}])
+    time.sleep(2.5)
+    r = _finding(tmp_path, signed)
+    cred = r.details["credentials"]
+    assert cred["state"] == "Invalid" and cred["credential_failures"] == ["signingCredential.expired"]
+    assert not cred["binding_broken"] and not cred["integrity_broken"]
+    assert r.status is Status.INCONCLUSIVE and r.score is None
+    assert "Valid Content Credentials" not in r.summary and "signingCredential.expired" in r.summary
+    assert "no evidence that the content changed" in r.summary
+
+
+def test_an_ingredient_whose_own_signature_fails_is_named(tmp_path, chain):
+    parent, _ = _sign(chain, [{"action": "c2pa.created", "digitalSourceType": CAPTURE}])
+    at = parent.find(b"c2pa.signature") + 600
+    forged = parent[:at] + bytes([parent[at] ^ 0x01]) + parent[at + 1:]
+    edit, _ = _sign(chain, [], parent=forged)
+    r = _finding(tmp_path, edit)
+    assert r.details["credentials"]["state"] == "Valid" and r.status is Status.OK
+    (bad,) = r.details["credentials"]["ingredient_failures"]
+    assert "claimSignature.mismatch" in bad["codes"]
+    assert "ingredient(s) carry credentials that fail validation (claimSignature.mismatch" in r.summary
 
 
 def test_declared_edits_and_generative_source(tmp_path, chain):
@@ -130,6 +168,32 @@ def test_a_sidecar_manifest_beside_the_photo(tmp_path, chain):
     r = _finding(tmp_path, signed)
     assert r.status is Status.OK and r.details["credentials"]["sidecar"] and r.details["sidecar_sha256"]
     assert r.details["credentials"]["state"] == "Valid"
+
+
+def test_a_broken_sidecar_never_hides_the_embedded_credentials(tmp_path, chain):
+    signed, _ = _sign(chain, [{"action": "c2pa.created", "digitalSourceType": CAPTURE}])
+    tampered = bytearray(signed)
+    tampered[-300] ^= 0x5A
+    (tmp_path / "photo.c2pa").write_bytes(b"x")
+    r = _finding(tmp_path, bytes(tampered))
+    assert r.status is Status.OK and r.score == 1.0 and r.details["credentials"]["binding_broken"]
+    assert "changed after it was signed" in r.summary
+    assert "The .c2pa file beside the photo cannot be read" in r.summary and r.details["sidecar_error"]
+
+    (tmp_path / "plain.c2pa").write_bytes(b"x")
+    r = _finding(tmp_path, _photo(), name="plain.jpg")
+    assert r.status is Status.INCONCLUSIVE and "no Content Credentials" in r.summary
+    assert "fault of that file, not of the photo" in r.summary
+
+
+def test_a_sidecar_beside_embedded_credentials_is_validated_beside_them(tmp_path, chain):
+    signed, _ = _sign(chain, [{"action": "c2pa.created", "digitalSourceType": CAPTURE}])
+    _, store = _sign(chain, [{"action": "c2pa.created", "digitalSourceType": CAPTURE}], embed=False)
+    (tmp_path / "photo.c2pa").write_bytes(store)
+    r = _finding(tmp_path, signed)
+    assert r.details["credentials"]["state"] == "Valid" and not r.details["credentials"]["sidecar"]
+    assert r.details["sidecar_credentials"]["sidecar"]
+    assert "holds another manifest store, which does not validate against the photo" in r.summary
 
 
 def test_a_garbled_manifest_store_is_one_line(tmp_path, chain):
