@@ -89,7 +89,7 @@ def analyse(evidence: Evidence, params: Mapping[str, Any], prior: Mapping[str, D
     info = evidence.info
     marks: dict[str, float] = {}
     t = time.perf_counter()
-    checks = [exif_presence(info), software_tag(info, xmp_agents(evidence.data)),
+    checks = [exif_presence(info), software_tag(info, xmp_agents(evidence.data, evidence.decoding)),
               datetimes(info, float(params["datetime_tolerance_s"])), dimensions(info),
               xmp_dates(info, float(params["datetime_tolerance_s"])), document_ancestors(info), makernote_serial(info),
               embedded_previews(info)]

@@ -11,26 +11,34 @@ entity or external reference in hostile evidence is ever resolved.
 
 from __future__ import annotations
 
+import contextlib
 import html
 import io
 import re
+from collections.abc import Callable
 
 from PIL import Image
 
-# Attribute form (tool="...") and element form (<tool>...</tool>), any prefix.
+# Attribute form (tool="...") and element form (<tool>...</tool>), any prefix. The attribute form starts at the
+# name itself: an optional "\w+:" before it would be tried, and backtracked, at every position of a long token,
+# which made one 64 KB word take 10 s (quadratic); the element form's prefix is bounded.
 _AGENT = re.compile(
-    rb"""(?:\w+:)?(CreatorTool|softwareAgent)\s*=\s*(?:"([^"]{0,200})"|'([^']{0,200})')"""
-    rb"""|<(?:\w+:)?(CreatorTool|softwareAgent)>([^<]{0,200})</""")
+    rb"""(CreatorTool|softwareAgent)\s*=\s*(?:"([^"]{0,200})"|'([^']{0,200})')"""
+    rb"""|<(?:\w{1,64}:)?(CreatorTool|softwareAgent)>([^<]{0,200})</""")
 _MAX_AGENTS = 50
 
 
-def xmp_agents(data: bytes) -> list[tuple[str, str]]:
+def xmp_agents(data: bytes, decoding: Callable = contextlib.nullcontext) -> list[tuple[str, str]]:
     """The distinct programs the file's XMP names, in order of appearance.
 
     Parameters
     ----------
     data : bytes
         The evidence file (read, never written).
+    decoding : callable
+        Context manager under which Pillow opens it
+        (:meth:`forensics_core.Evidence.decoding`: the user's pixel limit,
+        not Pillow's default).
 
     Returns
     -------
@@ -40,9 +48,9 @@ def xmp_agents(data: bytes) -> list[tuple[str, str]]:
         no readable XMP.
     """
     try:
-        with Image.open(io.BytesIO(data)) as img:
+        with decoding(), Image.open(io.BytesIO(data)) as img:
             packet = img.info.get("xmp") or b""
-    except (OSError, ValueError, SyntaxError, EOFError):
+    except (OSError, ValueError, SyntaxError, EOFError, Image.DecompressionBombError):
         return []
     if isinstance(packet, str):
         packet = packet.encode("utf-8", "replace")

@@ -58,3 +58,47 @@ def test_benchmark_without_the_corpus(tmp_path):
     out = subprocess.run([sys.executable, str(script), str(tmp_path / "absent")], capture_output=True, text=True,
                          timeout=60)
     assert out.returncode == 0 and "absent" in out.stdout
+
+
+_ONE_TOKEN = """
+import io, sys
+from PIL import Image, PngImagePlugin
+from forensics_plugins.metadata.xmp import xmp_agents
+info = PngImagePlugin.PngInfo()
+info.add_itxt("XML:com.adobe.xmp", "a" * 300_000 + ' xmp:CreatorTool="GIMP 2.10"')
+buf = io.BytesIO()
+Image.new("RGB", (16, 16)).save(buf, "PNG", pnginfo=info)
+print(xmp_agents(buf.getvalue()))
+"""
+
+
+def test_one_long_token_in_the_xmp_is_read_in_linear_time():
+    # 300 KB of one word took over a minute with a regular expression that backtracked at every position;
+    # read in linear time it takes milliseconds, so a minute's bound is no timing measurement.
+    out = subprocess.run([sys.executable, "-c", _ONE_TOKEN], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[('creator', 'GIMP 2.10')]"
+
+
+def test_the_users_pixel_limit_reaches_the_xmp_reader():
+    # The header claims 16000 x 16000 (256 MP), beyond Pillow's default bomb limit (179 MP); only the
+    # header is read.
+    import contextlib
+
+    from PIL import Image
+
+    data = bytearray(jpeg(photo((64, 48)), exif_bytes(make="Canon"), xmp=PACKET))
+    sof = data.find(b"\xff\xc0")
+    data[sof + 5: sof + 9] = (16000).to_bytes(2, "big") * 2
+
+    @contextlib.contextmanager
+    def limit():
+        before = Image.MAX_IMAGE_PIXELS
+        Image.MAX_IMAGE_PIXELS = 300_000_000
+        try:
+            yield
+        finally:
+            Image.MAX_IMAGE_PIXELS = before
+
+    assert xmp_agents(bytes(data)) == []
+    assert xmp_agents(bytes(data), limit)[0] == ("creator", "Adobe Photoshop 25.0 (Windows)")
