@@ -549,8 +549,14 @@ def _change_trust(command: str, done: str, change) -> None:
 def trust_add(cert):
     """Trust the certificate(s) in CERT (PEM or DER): a colleague's, or your organisation's CA."""
     from . import trust as trust_store
+    from .certificates import fingerprint, outside_validity
 
     _change_trust("keys trust add", "trusted", lambda: trust_store.add(cert))
+    for c in trust_store.read_certificates(cert):
+        problem = outside_validity(c)
+        if problem:
+            click.echo(f"warning: {fingerprint(c)} is {problem}; `verify` fails what it signed outside those dates",
+                       err=True)
 
 
 @trust_group.command("list")

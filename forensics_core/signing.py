@@ -29,7 +29,8 @@ from cryptography.x509.oid import NameOID
 
 from . import trust
 from .atomic import write_atomic, write_new
-from .certificates import fingerprint, is_self_signed
+from .certificates import fingerprint, is_self_signed, outside_validity
+from .reading import SMALL, FileRefused, read_limited
 from .defaults import KEY_TYPES
 from .home import config_dir
 
@@ -168,7 +169,9 @@ def write_key_files(folder: Path, p12: bytes, cert: x509.Certificate, stem: str 
 def load_key(path: Path, password: bytes | None) -> ExaminerKey:
     """Load a PKCS#12 file; the certificate must carry an ECDSA P-256/P-384 or RSA (>= 2048 bit) key."""
     try:
-        data = path.read_bytes()
+        data = read_limited(path, SMALL)
+    except FileRefused as exc:
+        raise SigningError(f"cannot read the key: {exc}") from None
     except OSError as exc:
         raise SigningError(f"cannot read the key {path}: {exc.strerror or exc}") from None
     try:
@@ -183,6 +186,10 @@ def load_key(path: Path, password: bytes | None) -> ExaminerKey:
                            "(poppler rejects Ed25519 signatures)")
     if isinstance(public, rsa.RSAPublicKey) and public.key_size < 2048:
         raise SigningError(f"the RSA key {path} has {public.key_size} bits; at least 2048 are needed")
+    # A signature made outside the certificate's validity would be refused by any verifier.
+    problem = outside_validity(cert)
+    if problem:
+        raise SigningError(f"the certificate of the key {path} is {problem}: make or obtain a new key")
     return ExaminerKey(cert=cert, pkcs12_data=data, password=password, source=str(path))
 
 

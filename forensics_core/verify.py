@@ -30,13 +30,16 @@ import json
 import stat
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from datetime import datetime
 from io import BytesIO
 from pathlib import Path
 
 from asn1crypto import cms
 from asn1crypto import x509 as asn1_x509
 
+from .certificates import outside_validity, read_certificates
 from .manifest import FINDINGS_NAME, MANIFEST_NAME, PDF_NAME, SIGNATURE_NAME, Manifest, sha256_file
+from .reading import DOCUMENT, MANIFEST, SMALL, FileRefused, read_limited
 from .trust import trusted
 
 
@@ -80,15 +83,13 @@ def load_trust(path: Path) -> list[asn1_x509.Certificate]:
     ValueError
         When the file holds no certificate.
     """
-    from pyhanko.keys import load_certs_from_pemder
+    from cryptography.hazmat.primitives.serialization import Encoding
 
-    try:
-        certs = list(load_certs_from_pemder([str(path)]))
-    except (OSError, ValueError) as exc:
-        raise ValueError(f"cannot read trusted certificate {path}: {exc}") from None
+    # Read as every certificate is read: a regular file of bounded size (a FIFO given here hung verify).
+    certs = read_certificates(path)
     if not certs:
         raise ValueError(f"{path} holds no certificate")
-    return certs
+    return [asn1_x509.Certificate.load(c.public_bytes(Encoding.DER)) for c in certs]
 
 
 def _anchors(extra: Sequence[Path]) -> list[tuple[asn1_x509.Certificate, str]]:
@@ -114,7 +115,7 @@ def _check_manifest_signature(folder: Path, manifest_bytes: bytes,
     from pyhanko.sign.validation.generic_cms import async_validate_detached_cms
 
     try:
-        info = cms.ContentInfo.load((folder / SIGNATURE_NAME).read_bytes())
+        info = cms.ContentInfo.load(read_limited(folder / SIGNATURE_NAME, SMALL))
         signed = info["content"]
         signer_info = signed["signer_infos"][0]
         sid = signer_info["sid"]
@@ -125,6 +126,9 @@ def _check_manifest_signature(folder: Path, manifest_bytes: bytes,
                                                          signer_validation_context=_context([signer])))
     except FileNotFoundError:
         result.fail(SIGNATURE_NAME, "missing")
+        return None
+    except FileRefused as exc:
+        result.fail(SIGNATURE_NAME, f"refused: {exc}")
         return None
     except Exception as exc:  # any parse failure of a damaged signature file is a failed check
         result.fail(SIGNATURE_NAME, f"not a readable CMS signature ({type(exc).__name__})")
@@ -149,7 +153,7 @@ def _check_pdf(path: Path, signer: asn1_x509.Certificate | None, result: Verific
 
     name = path.name
     try:
-        reader = PdfFileReader(BytesIO(path.read_bytes()))
+        reader = PdfFileReader(BytesIO(read_limited(path, DOCUMENT)))
         signatures = reader.embedded_signatures
         if len(signatures) != 1:
             result.fail(name, f"expected one signature, found {len(signatures)}")
@@ -178,14 +182,18 @@ def _check_files(folder: Path, manifest: Manifest, result: Verification) -> None
     listed = {f.name for f in manifest.files}
     for entry in manifest.files:
         path = folder / entry.name
-        if Path(entry.name).is_absolute() or ".." in Path(entry.name).parts:
-            result.fail(entry.name, "manifest names a file outside the bundle")
-        elif not path.is_file():
-            result.fail(entry.name, "missing")
-        elif sha256_file(path) != entry.sha256:
-            result.fail(entry.name, "SHA-256 does not match the manifest (altered)")
-        else:
-            result.passed.append(f"{entry.name}: SHA-256 matches")
+        try:
+            if Path(entry.name).is_absolute() or ".." in Path(entry.name).parts:
+                result.fail(entry.name, "manifest names a file outside the bundle")
+            elif not path.is_file():
+                result.fail(entry.name, "missing")
+            elif sha256_file(path) != entry.sha256:
+                result.fail(entry.name, "SHA-256 does not match the manifest (altered)")
+            else:
+                result.passed.append(f"{entry.name}: SHA-256 matches")
+        except OSError as exc:
+            # A name the file system refuses (too long, say) fails this check only; the others still run.
+            result.fail(entry.name, f"cannot be read: {exc.strerror or exc}")
     for path in sorted(folder.iterdir()):
         if path.name not in listed and path.name not in (MANIFEST_NAME, SIGNATURE_NAME):
             result.fail(path.name, "not listed in the manifest")
@@ -249,6 +257,22 @@ def _check_trust(signer: asn1_x509.Certificate, others: list[asn1_x509.Certifica
     result.passed.append(f"signer: {who}, trusted ({origin})")
 
 
+def _check_validity(signer: asn1_x509.Certificate, created: str, result: Verification) -> None:
+    """The signing certificate was valid when the bundle was signed (the manifest's time, not today's)."""
+    from cryptography import x509
+
+    try:
+        at = datetime.fromisoformat(created.replace("Z", "+00:00"))
+        if at.tzinfo is None:
+            raise ValueError(created)
+    except ValueError:
+        result.fail(MANIFEST_NAME, f"records no readable signing time ({created[:40]!r})")
+        return
+    problem = outside_validity(x509.load_der_x509_certificate(signer.dump()), at)
+    if problem:
+        result.fail("signer", f"the signing certificate was {problem} when the bundle was signed ({created})")
+
+
 def _check_outputs(folder: Path, manifest: Manifest, result: Verification) -> None:
     """Every produced document listed, and findings.json about the evidence the manifest names."""
     listed = {f.name for f in manifest.files}
@@ -257,7 +281,7 @@ def _check_outputs(folder: Path, manifest: Manifest, result: Verification) -> No
             result.fail(name, "missing: the manifest records it as produced but does not list it")
     if FINDINGS_NAME in listed and (folder / FINDINGS_NAME).is_file():
         try:
-            doc = json.loads((folder / FINDINGS_NAME).read_text(encoding="utf-8"))
+            doc = json.loads(read_limited(folder / FINDINGS_NAME, DOCUMENT).decode("utf-8"))
             sha = doc["evidence"]["sha256"]
         except (OSError, ValueError, KeyError, TypeError, RecursionError):
             result.fail(FINDINGS_NAME, "unreadable: not the findings of a forensics run")
@@ -294,7 +318,10 @@ def verify_bundle(folder: Path, evidence: Path | None = None, trust: Path | Sequ
     result = Verification()
     anchors = _anchors([trust] if isinstance(trust, Path) else list(trust))
     try:
-        manifest_bytes = (folder / MANIFEST_NAME).read_bytes()
+        manifest_bytes = read_limited(folder / MANIFEST_NAME, MANIFEST)
+    except FileRefused as exc:
+        result.fail(MANIFEST_NAME, f"refused: {exc}")
+        return result
     except OSError:
         result.fail(MANIFEST_NAME, "missing")
         return result
@@ -314,6 +341,7 @@ def verify_bundle(folder: Path, evidence: Path | None = None, trust: Path | Sequ
         return result
     if manifest.signer.get("sha256_fingerprint") != _fingerprint(signer):
         result.fail(MANIFEST_NAME, "names a different signing certificate than the one that signed it")
+    _check_validity(signer, manifest.created, result)
     _check_files(folder, manifest, result)
     _check_outputs(folder, manifest, result)
     pdf_failed = False

@@ -3,6 +3,7 @@
 import json
 from datetime import datetime, timedelta, timezone
 
+import pytest
 from cryptography import x509
 from cryptography.hazmat.primitives import hashes, serialization
 from cryptography.hazmat.primitives.asymmetric import ec
@@ -169,3 +170,89 @@ def test_a_signer_issued_by_a_trusted_ca_is_trusted(tmp_path, data_dir):
     out = run("verify", folder)
     assert out.returncode == 0, out.stderr
     assert "Common Name: Issued Examiner" in out.stdout and "trusted (trust store)" in out.stdout
+
+
+def _fifo_or_device(path, kind):
+    import os
+
+    path.unlink(missing_ok=True)
+    if kind == "fifo":
+        os.mkfifo(path)
+    else:
+        path.symlink_to("/dev/zero")
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device"])
+@pytest.mark.parametrize("name", [MANIFEST_NAME, SIGNATURE_NAME])
+def test_a_manifest_or_signature_that_is_no_regular_file_is_refused_at_once(bundle_copy, name, kind):
+    # A FIFO hung verify; a link to /dev/zero grew to 3.8 GB before a MemoryError.
+    _fifo_or_device(bundle_copy / name, kind)
+    out = run("verify", bundle_copy)
+    assert out.returncode == 1, out.stdout + out.stderr
+    assert f"{name}: refused: " in out.stderr and "is not a regular file" in out.stderr
+    assert "Traceback" not in out.stderr and "internal error" not in out.stderr
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device"])
+def test_a_certificate_or_key_that_is_no_regular_file_is_refused_at_once(tmp_path, isolated_home, bundle, kind):
+    path = tmp_path / "cert.pem"
+    _fifo_or_device(path, kind)
+    for args in (("keys", "trust", "add", path), ("verify", bundle, "--trust", path)):
+        out = run(*args)
+        assert out.returncode != 0 and "is not a regular file" in out.stderr, (args, out.stderr)
+        assert "Traceback" not in out.stderr
+    with pytest.raises(signing.SigningError, match="is not a regular file"):
+        signing.load_key(path, None)
+
+
+def _dated_key(tmp_path, before: timedelta, after: timedelta):
+    """A self-signed examiner key valid from now + before to now + after (PKCS#12 path, PEM path)."""
+    now = datetime.now(timezone.utc)
+    k = ec.generate_private_key(ec.SECP256R1())
+    name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "Dated Examiner")])
+    cert = (x509.CertificateBuilder().subject_name(name).issuer_name(name).public_key(k.public_key())
+            .serial_number(7).not_valid_before(now + before).not_valid_after(now + after)
+            .sign(k, hashes.SHA256()))
+    p12 = tmp_path / "dated.p12"
+    p12.write_bytes(pkcs12.serialize_key_and_certificates(b"dated", k, cert, None, NoEncryption()))
+    pem = tmp_path / "dated.pem"
+    pem.write_bytes(cert.public_bytes(serialization.Encoding.PEM))
+    return p12, pem
+
+
+@pytest.mark.parametrize("when", ["expired", "not yet valid"])
+def test_a_certificate_outside_its_validity_is_warned_of_refused_for_signing(tmp_path, isolated_home, when):
+    before, after = ((-timedelta(days=400), -timedelta(days=30)) if when == "expired" else
+                     (timedelta(days=400), timedelta(days=800)))
+    p12, pem = _dated_key(tmp_path, before, after)
+    out = run("keys", "trust", "add", pem)
+    assert out.returncode == 0 and "warning: " in out.stderr
+    assert ("expired on " if when == "expired" else "not valid until ") in out.stderr
+    with pytest.raises(signing.SigningError, match="expired on|not valid until"):
+        signing.load_key(p12, None)
+
+
+def test_verify_fails_a_bundle_signed_outside_the_signer_s_validity(bundle_copy, tmp_path, key):
+    # The manifest's signing time is the reference: a bundle signed after the certificate expired fails.
+    manifest = json.loads((bundle_copy / MANIFEST_NAME).read_text())
+    manifest["created"] = "2099-01-01T00:00:00Z"
+    data = json.dumps(manifest).encode()
+    (bundle_copy / MANIFEST_NAME).write_bytes(data)
+    (bundle_copy / SIGNATURE_NAME).write_bytes(signing.sign_detached(data, key))
+    out = run("verify", bundle_copy)
+    assert out.returncode == 1
+    assert "the signing certificate was expired on " in out.stderr and "2099-01-01" in out.stderr
+
+
+def test_a_manifest_naming_a_file_too_long_for_the_file_system_fails_that_file_only(bundle_copy, key):
+    manifest = json.loads((bundle_copy / MANIFEST_NAME).read_text())
+    long_name = "n" * 300
+    manifest["files"].append({"name": long_name, "size": 1, "sha256": "0" * 64})
+    manifest["files"].append({"name": "/".join(["d" * 200] * 25), "size": 1, "sha256": "0" * 64})
+    data = json.dumps(manifest).encode()
+    (bundle_copy / MANIFEST_NAME).write_bytes(data)
+    (bundle_copy / SIGNATURE_NAME).write_bytes(signing.sign_detached(data, key))
+    out = run("verify", bundle_copy)
+    assert out.returncode == 1 and "internal error" not in out.stderr, out.stderr
+    assert f"{long_name}: cannot be read: " in out.stderr
+    assert "findings.json" not in out.stderr and "signer" not in out.stderr.split("cannot be read")[0]
