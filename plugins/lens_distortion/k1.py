@@ -46,6 +46,9 @@ __all__ = [
 # (theta, rho) cannot absorb counts as zero: the line is radial and says
 # nothing about k1 (a radial line stays straight under radial distortion).
 _RADIAL_TOLERANCE = 1e-10
+#: Sub-pixel edges are never located better than this (8-bit grey levels): a drawn, noiseless edge fits its line
+#: exactly, and a zero residual would give its line infinite weight.
+MIN_EDGE_NOISE_PX = 0.01
 
 _K1_STARTS = (0.0, -0.25, 0.25)  # starts of the single-line fit, normalised k1
 
@@ -429,7 +432,7 @@ def fit_lines(
     radial = info <= _RADIAL_TOLERANCE * s.sum(r2**3)
     info = np.where(radial, 0.0, info)
     dof = np.maximum(s.counts - 3, 1)
-    sigma = np.sqrt(s.sum(residual**2) / dof)
+    sigma = np.maximum(np.sqrt(s.sum(residual**2) / dof), MIN_EDGE_NOISE_PX / scale_px)
     tau = np.array([integrated_autocorrelation(residual[a : a + n]) for a, n in zip(s.starts, s.counts)])
     with np.errstate(divide="ignore"):
         stderr_white = np.where(radial, np.inf, sigma / np.sqrt(info))

@@ -297,6 +297,8 @@ def _drop_short(starts: np.ndarray, min_points: int) -> np.ndarray:
 # Column layout of the moment sums of a point set, p = (x, y) normalised,
 # q = p |p|^2, so that the undistorted point is z = p + k1 q (paper eqs. 6-7).
 _N, _PX, _PY, _QX, _QY = 0, 1, 2, 3, 4
+#: Point sets fitted at once by :func:`_fit_moments`.
+_FIT_CHUNK = 16384
 _PXX, _PXY, _PYY = 5, 6, 7
 _PXQX, _PXQY, _PYQX, _PYQY = 8, 9, 10, 11
 _QXX, _QXY, _QYY = 12, 13, 14
@@ -361,6 +363,11 @@ def _fit_moments(m: np.ndarray, max_k1: float, scale_px: float) -> _Fit:
     scale_px : float
         Pixels per normalised unit.
     """
+    if m.shape[0] > _FIT_CHUNK:
+        # The grid search holds G x _K1_GRID values per moment term: in bounded chunks, not all at once (a
+        # drawn checkerboard offers millions of candidate pairs).
+        parts = [_fit_moments(m[i: i + _FIT_CHUNK], max_k1, scale_px) for i in range(0, m.shape[0], _FIT_CHUNK)]
+        return _Fit(*(np.concatenate([getattr(f, name) for f in parts]) for name in ("k1", "normal", "rho", "rms_px")))
     grid = np.linspace(-max_k1, max_k1, _K1_GRID)
     obj = _objective(m[:, None, :], grid[None, :])
     best = np.clip(np.argmin(obj, axis=1), 1, _K1_GRID - 2)

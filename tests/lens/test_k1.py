@@ -130,3 +130,15 @@ def test_deterministic():
 def test_paper_k1_is_undefined_for_too_few_or_coincident_points():
     assert np.isnan(k1_paper(np.zeros((5, 2))))
     assert np.isnan(k1_paper(np.array([[0.1, 0.2], [0.3, 0.2]])))
+
+
+def test_a_drawn_noiseless_line_gets_the_edge_noise_floor_not_infinite_weight():
+    # A drawn checkerboard's edges fit their lines exactly; a zero residual made a zero standard error, an
+    # infinite weight and a crash of the global fit ("Residuals are not finite") on a 25 MP board.
+    from forensics_plugins.lens_distortion.k1 import MIN_EDGE_NOISE_PX, fit_lines
+
+    t = np.linspace(-0.4, 0.4, 400)
+    points = np.column_stack((np.full_like(t, 0.3), t))
+    (fit,) = fit_lines([points], 2000.0)
+    assert fit.residual_rms_px >= MIN_EDGE_NOISE_PX
+    assert np.isfinite(fit.k1_stderr) and fit.k1_stderr > 0
