@@ -297,6 +297,20 @@ def _lens_corrected(rgb: np.ndarray, k1: float) -> np.ndarray:
     return cv2.undistort(rgb, camera, np.array([k1, 0.0, 0.0, 0.0]), None, camera)
 
 
+def _pasted_piece_is_found(tmp_path, rng, host: np.ndarray, grid: tuple[int, int], box: tuple[slice, slice]):
+    """``host`` with a piece of another JPEG compressed on ``grid`` pasted at ``box``, saved at quality 98: the
+    piece is the strongest foreign region, on its grid. Returns the result."""
+    shape = host.shape[:2]
+    donor = synth.decode_cropped(synth.jpeg_bytes(synth.render_scene(rng, shape, "coffee"), 80, grid), grid)
+    pasted = host.copy()
+    pasted[box] = donor[box]
+    spliced = analyse(load_evidence(_file(tmp_path, "spliced.jpg", synth.jpeg_bytes(pasted, 98))), DEFAULT_PARAMS)
+    foreign = [r for r in spliced.details["regions"] if r["meaningful"]]
+    assert foreign and foreign[0]["grid"] == list(grid) and foreign[0]["stage"] == "foreign"
+    assert spliced.nfa < 1e-6
+    return spliced
+
+
 def test_lens_correction_is_named_processing_and_a_piece_pasted_into_it_is_still_found(tmp_path):
     """A camera JPEG lens-corrected and saved at quality 98 keeps its first grid shifted along each radius.
 
@@ -320,13 +334,7 @@ def test_lens_correction_is_named_processing_and_a_piece_pasted_into_it_is_still
         "radial resampling", "resampled by a radial warp about its centre after a first JPEG compression, as lens "
         "correction does")
 
-    donor = synth.decode_cropped(synth.jpeg_bytes(synth.render_scene(rng, (1200, 1600), "coffee"), 80, (3, 5)), (3, 5))
-    pasted = corrected.copy()
-    pasted[450:750, 350:650] = donor[450:750, 350:650]
-    spliced = analyse(load_evidence(_file(tmp_path, "spliced.jpg", synth.jpeg_bytes(pasted, 98))), DEFAULT_PARAMS)
-    foreign = [r for r in spliced.details["regions"] if r["meaningful"]]
-    assert foreign and foreign[0]["grid"] == [3, 5] and foreign[0]["stage"] == "foreign"
-    assert spliced.nfa < 1e-6
+    _pasted_piece_is_found(tmp_path, rng, corrected, (3, 5), (slice(450, 750), slice(350, 650)))
 
 
 def test_crop_after_compression_is_named_processing_and_a_piece_pasted_into_it_is_still_found(tmp_path):
@@ -348,10 +356,5 @@ def test_crop_after_compression_is_named_processing_and_a_piece_pasted_into_it_i
     assert [r["stage"] for r in d["regions"]] == ["cropped"] and d["n_meaningful"] == 0 and result.nfa == 1.0
     assert "cropped off the block grid" in result.summary
 
-    donor = synth.decode_cropped(synth.jpeg_bytes(synth.render_scene(rng, (900, 1200), "coffee"), 80, (6, 2)), (6, 2))
-    pasted = cropped.copy()
-    pasted[300:560, 400:700] = donor[300:560, 400:700]
-    spliced = analyse(load_evidence(_file(tmp_path, "spliced.jpg", synth.jpeg_bytes(pasted, 98))), DEFAULT_PARAMS)
-    foreign = [r for r in spliced.details["regions"] if r["meaningful"]]
-    assert foreign and foreign[0]["grid"] == [6, 2] and foreign[0]["stage"] == "foreign"
-    assert spliced.details["processing"]["crop"]["grid"] == [3, 5] and spliced.nfa < 1e-6
+    spliced = _pasted_piece_is_found(tmp_path, rng, cropped, (6, 2), (slice(300, 560), slice(400, 700)))
+    assert spliced.details["processing"]["crop"]["grid"] == [3, 5]
