@@ -82,6 +82,9 @@ class _Text(click.ParamType):
     An argument typed in another encoding than the terminal's holds bytes
     that are not UTF-8, which none of those can hold: it is refused here, as
     a usage error, rather than failing once the photo has been analysed.
+    Control and format characters (ESC, BEL, a bidirectional override
+    U+202E that turns "Org\u202etxt.pdf" into "Orgfdp.txt" on the page) are
+    kept as visible escapes, never as acting characters.
     """
 
     name = "text"
@@ -89,7 +92,7 @@ class _Text(click.ParamType):
     def convert(self, value, param, ctx):
         if isinstance(value, str) and undecodable(value):
             self.fail(f"{visible(value)} holds bytes that are not UTF-8 text; type it in UTF-8", param, ctx)
-        return value
+        return visible(value) if isinstance(value, str) else value
 
 
 TEXT = _Text()

@@ -45,6 +45,8 @@ else:
 # own (libavif), HEIF comes from pillow-heif (libheif).
 ALLOWED_FORMATS = ("JPEG", "PNG", "TIFF", "WEBP", "AVIF") + (("HEIF",) if pillow_heif else ())
 _RAW_VALUE_LIMIT = 512
+#: Frames or pages of a container listed in the findings; the rest are counted as more, not listed.
+MAX_LISTED_IMAGES = 100
 
 # Luma weights of ITU-R BT.601, the ones JPEG's YCbCr uses.
 _LUMA = np.array([0.299, 0.587, 0.114])
@@ -371,6 +373,19 @@ def _mpo_kind(img: Image.Image, index: int) -> str:
     return "MPO image"
 
 
+def _first_pages(img: Image.Image, limit: int) -> int:
+    """How many pages the image has, counted up to ``limit``; leaves it on page 0."""
+    count = 1
+    while count < limit:
+        try:
+            img.seek(count)
+        except EOFError:
+            break
+        count += 1
+    img.seek(0)
+    return count
+
+
 def _other_images(img: Image.Image, max_pixels: int) -> list[ContainedImage]:
     """Every image in the container but the one analysed; leaves ``img`` on the analysed frame.
 
@@ -381,13 +396,16 @@ def _other_images(img: Image.Image, max_pixels: int) -> list[ContainedImage]:
     out: list[ContainedImage] = []
     kind = {"TIFF": "page", "HEIF": "HEIF image", "AVIF": "AVIF image"}.get(str(img.format), "frame")
     try:
-        n = int(getattr(img, "n_frames", 1) or 1)
+        # A TIFF's page count is found by reading every page's header: 100,000 pages took minutes, before any
+        # time limit, so its pages are walked only as far as they are listed.
+        n = _first_pages(img, MAX_LISTED_IMAGES + 1) if img.format == "TIFF" else int(getattr(img, "n_frames", 1) or 1)
     except _DECODE_ERRORS:
-        # Counting pages reads every page's header; a broken later page must
-        # not cost the first one.
+        # A broken later page must not cost the first one.
         img.seek(0)
         return [ContainedImage(1, f"unreadable {kind}(s) after the first")]
     primary = 0
+    unlisted = n > MAX_LISTED_IMAGES
+    n = min(n, MAX_LISTED_IMAGES)
     if n > 1:
         for i in range(n):
             try:
@@ -400,6 +418,8 @@ def _other_images(img: Image.Image, max_pixels: int) -> list[ContainedImage]:
             out.append(ContainedImage(i, _mpo_kind(img, i) if img.format == "MPO" else kind, *img.size))
         img.seek(primary)
         out = [c for c in out if c.index != primary]
+    if unlisted:
+        out.append(ContainedImage(MAX_LISTED_IMAGES, f"more {kind}s, not listed (over {MAX_LISTED_IMAGES} in all)"))
     if img.format == "HEIF":
         for key, kind in (("thumbnails", "HEIF thumbnail"), ("depth_images", "HEIF depth image")):
             for i, item in enumerate(img.info.get(key) or []):

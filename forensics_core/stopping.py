@@ -37,6 +37,10 @@ def _interrupt(signum, frame) -> None:
 
 
 def _terminate(signum, frame) -> None:
+    # A scheduler may send SIGTERM again while the first is being handled: raised inside that handling, it
+    # escaped as a traceback, and arriving once Python had restored the default handler at exit, it killed the
+    # process. The command is already stopping, so later ones are ignored (SIGKILL still ends it).
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     _received.append(signum)
     raise Terminated()
 

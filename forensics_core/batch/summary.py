@@ -35,6 +35,7 @@ from typing import Any
 from .. import __version__
 from ..atomic import write_atomic
 from ..manifest import FINDINGS_NAME
+from ..text import visible
 from .plan import SUMMARY_CSV, SUMMARY_JSON
 
 OUTCOMES = ("analysed", "resumed", "duplicate", "failed", "pending")
@@ -95,6 +96,9 @@ def detector_names(rows: list[Row], selected: list[str]) -> list[str]:
 
 
 def _cell(value: Any) -> Any:
+    # File names may hold ESC or U+202E; a spreadsheet or a terminal shows the escape, never the effect.
+    if isinstance(value, str):
+        value = visible(value)
     if isinstance(value, str) and value.startswith(_FORMULA_START):
         return "'" + value
     return "" if value is None else value

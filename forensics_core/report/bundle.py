@@ -25,6 +25,7 @@ from ..manifest import (FINDINGS_NAME, HTML_NAME, MANIFEST_NAME, PDF_NAME, SIGNA
 from ..atomic import write_atomic
 from ..plugins import PluginHost
 from ..signing import UNNAMED_EXAMINER, ExaminerKey, sign_detached, sign_pdf
+from ..text import visible
 from .render import ReportOptions, SignatureInfo, render_html, render_pdf
 
 REPORT_FORMATS = ("html", "pdf")
@@ -48,11 +49,12 @@ def signature_info(key: ExaminerKey, examiner: str | None, organisation: str | N
 
     cn = key.cert.subject.get_attributes_for_oid(NameOID.COMMON_NAME)
     named = str(cn[0].value) if cn and str(cn[0].value) != UNNAMED_EXAMINER else None
+    # A certificate made elsewhere may carry control or bidirectional characters in its names.
     return SignatureInfo(
-        examiner=examiner or named or ("not named: the signing key names no examiner (give --examiner, or make a key "
-                                       "with forensics keys create)"),
-        organisation=organisation or key.organisation or "not given",
-        subject=key.subject,
+        examiner=visible(examiner or named or ("not named: the signing key names no examiner (give --examiner, or "
+                                               "make a key with forensics keys create)")),
+        organisation=visible(organisation or key.organisation or "not given"),
+        subject=visible(key.subject),
         fingerprint=key.fingerprint,
         self_signed=key.self_signed,
         valid_from=_utc(key.cert.not_valid_before_utc),

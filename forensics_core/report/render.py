@@ -384,8 +384,11 @@ def render_html(findings: Findings, evidence: Evidence, signature: SignatureInfo
         Already built sections (otherwise built here).
     """
     css = _stylesheet(options.paper)
+    # A plugin's section is held to the run's --timeout, as its analysis was.
+    timeout = findings.parameters.get("timeout_s")
     built = (list(sections) if sections is not None
-             else sections_for(host, findings.detectors, evidence, jobs=options.jobs))
+             else sections_for(host, findings.detectors, evidence, jobs=options.jobs,
+                               timeout_s=float(timeout) if isinstance(timeout, (int, float)) and timeout > 0 else None))
     thumbnail = images.thumbnail_jpeg(evidence.thumbnail)
     ev = findings.evidence
     context = {

@@ -22,6 +22,13 @@ def test_csv_has_a_column_pair_per_detector_and_defuses_formulas():
     assert float(table[0]["log10_lr"]) == 1.48 and table[1]["log10_lr"] == ""
 
 
+def test_csv_shows_control_and_bidirectional_characters_escaped():
+    rows = [Row("photo\x1b[31m\u202egpj.exe", None, "failed", error="bad\x07")]
+    text = to_csv(rows, []).decode()
+    assert "\x1b" not in text and "\u202e" not in text and "\x07" not in text
+    assert "photo\\x1b[31m\\u202egpj.exe" in text and "bad\\x07" in text
+
+
 def test_summary_json_counts_outcomes_and_verdicts(tmp_path):
     rows = [Row("a", "1", "analysed", "consistent"), Row("b", "1", "duplicate", "consistent"),
             Row("c", None, "failed", error="empty file"), Row("d", "2", "pending")]

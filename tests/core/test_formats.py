@@ -109,6 +109,18 @@ def test_a_detector_decoding_again_is_held_to_the_intake_limit_not_pillows(photo
     assert Image.MAX_IMAGE_PIXELS == 10_000
 
 
+def test_a_tiff_of_thousands_of_pages_is_taken_in_on_its_first_with_a_bounded_list(tmp_path):
+    # 100,000 pages were read header by header before any time limit, and all listed in the findings.
+    from forensics_core.evidence import MAX_LISTED_IMAGES
+
+    page = Image.new("L", (8, 8), 128)
+    page.save(tmp_path / "many.tif", save_all=True, append_images=[page] * 3000)
+    ev = load_evidence(tmp_path / "many.tif")
+    listed = ev.info.other_images
+    assert len(listed) == MAX_LISTED_IMAGES and listed[-1].kind.startswith("more pages, not listed")
+    assert [c.index for c in listed[:-1]] == list(range(1, MAX_LISTED_IMAGES))
+
+
 def test_a_tiff_whose_second_page_is_broken_is_analysed_on_its_first(chessboard, tmp_path):
     buf = io.BytesIO()
     chessboard.save(buf, "TIFF", save_all=True, append_images=[chessboard.resize((320, 240))])

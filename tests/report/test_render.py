@@ -204,6 +204,17 @@ def test_a_section_hook_that_hangs_or_ends_its_process_costs_only_its_section(tm
     assert "Sectioned fixture detector" in report.html
 
 
+def test_a_hanging_section_is_held_to_the_run_s_timeout(tmp_path):
+    # It was held for a fixed 300 s whatever --timeout said.
+    from forensics_core.analysis import Options, analyze_evidence
+
+    host = report_host("section_hanging")
+    evidence = load_evidence(hostile_jpeg(tmp_path / "p.jpg"))
+    findings = analyze_evidence(evidence, host, Options(case_id="C-1", isolation="inline", timeout_s=2.0))
+    report = render_html(findings, evidence, SIGNATURE, ReportOptions(exhibit_id="E-1"), host=host)
+    assert "section_hanging: report section failed" in report.html and "timed out after 2 s" in report.html
+
+
 def test_sections_made_at_once_are_those_made_one_at_a_time(tmp_path):
     photo = hostile_jpeg(tmp_path / "p.jpg")
     one, two = (render(photo, "sectioned", "no_section", "section_raising", report_date="2026-01-01T00:00:00Z",
