@@ -93,7 +93,7 @@ from scipy.special import ndtri, stdtr
 
 from .geometry import norm_scale, to_normalised
 from .error_model import BOW_REL, DOF, TAU_K1, TAU_PHOTO
-from .k1 import LineK1, fit_lines, fit_lines_multistart
+from .k1 import MIN_EDGE_NOISE_PX, LineK1, fit_lines, fit_lines_multistart
 from .regions import REGION_MIN_LENGTH, RegionTest, region_test, structures
 
 __all__ = [
@@ -834,7 +834,8 @@ def _decide(
     # Per-line noise from each line's own fit, so a pasted line's misfit to
     # the global model does not hide it; sqrt(tau) inflates for correlation.
     tau = np.array([f.n_points / f.n_effective for f in fits])
-    noise = np.array([f.residual_rms_px / scale for f in fits]) * np.sqrt(np.maximum(1.0, tau / step))
+    noise = (np.maximum([f.residual_rms_px for f in fits], MIN_EDGE_NOISE_PX) / scale
+             * np.sqrt(np.maximum(1.0, tau / step)))
     model_var = _model_var(fits, chords_px[informative], tau_k1, bow_rel)
     # Each line's model error is a random effect shared by all its points:
     # scaling its point weights by noise / (noise + model error) gives the

@@ -432,10 +432,12 @@ def fit_lines(
     radial = info <= _RADIAL_TOLERANCE * s.sum(r2**3)
     info = np.where(radial, 0.0, info)
     dof = np.maximum(s.counts - 3, 1)
-    sigma = np.maximum(np.sqrt(s.sum(residual**2) / dof), MIN_EDGE_NOISE_PX / scale_px)
+    sigma = np.sqrt(s.sum(residual**2) / dof)
+    # The error of k1 rests on the noise floor; the residual reported is the one measured.
+    floored = np.maximum(sigma, MIN_EDGE_NOISE_PX / scale_px)
     tau = np.array([integrated_autocorrelation(residual[a : a + n]) for a, n in zip(s.starts, s.counts)])
     with np.errstate(divide="ignore"):
-        stderr_white = np.where(radial, np.inf, sigma / np.sqrt(info))
+        stderr_white = np.where(radial, np.inf, floored / np.sqrt(info))
     return [
         LineK1(
             k1=float(params[j, 0]),
