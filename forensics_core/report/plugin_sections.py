@@ -155,7 +155,7 @@ def section_for(host: PluginHost | None, finding: DetectorFinding, evidence: Evi
     """The section of one finding, from the plugin that registered its detector.
 
     Never raises: whatever the plugin does wrong (raising, hanging past
-    ``timeout_s``, default :data:`SECTION_TIMEOUT_S`, ending its process)
+    ``timeout_s``, at most :data:`SECTION_TIMEOUT_S`, ending its process)
     becomes the section's ``failure``; the hook runs in a child process, as
     detectors do.
     """
@@ -187,7 +187,7 @@ def sections_for(host: PluginHost | None, findings: Sequence[DetectorFinding], e
     while pending or running:
         while pending and len(running) < jobs:
             i, call = pending.pop(0)
-            running[Child(call, timeout_s or SECTION_TIMEOUT_S)] = i
+            running[Child(call, SECTION_TIMEOUT_S if timeout_s is None else min(timeout_s, SECTION_TIMEOUT_S))] = i
         for child in wait_any(list(running)):
             i = running.pop(child)
             outcome, _ = child.collect()

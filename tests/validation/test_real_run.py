@@ -18,7 +18,7 @@ from forensics_core.report import error_rates as rates_module
 from forensics_core.report.error_rates import given_error_rates, shipped_error_rates
 from forensics_core.report.render import _environment
 from forensics_core.validation import read_record, read_suite, validate
-from forensics_core.validation.record import SHIPPED, SHIPPED_REAL, VERDICT
+from forensics_core.validation.record import SHIPPED, SHIPPED_INNOCENT, SHIPPED_REAL, VERDICT
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -91,14 +91,14 @@ def test_page_shows_the_curves_and_the_convicted_photo_with_its_map(run):
 def test_report_states_real_figures_first_then_synthetic(run, monkeypatch):
     out, record = run
     findings = Findings.from_dict(json.loads(next((out / "findings").glob("*.json")).read_text()))
-    shipped = {SHIPPED_REAL: record, SHIPPED: None}
+    shipped = {SHIPPED_REAL: record, SHIPPED_INNOCENT: None, SHIPPED: None}
     monkeypatch.setattr(rates_module, "shipped_record", lambda name: shipped[name])
     section = shipped_error_rates(findings)
     assert [r.heading for r in section.records] == ["Real photos"]
     assert section.records[0].data.startswith("8 authentic and 3 manipulated photos")
     assert "cameras/one (5 authentic)" in section.records[0].data and "pairs (3 authentic, 3 manipulated)" in section.records[0].data
     assert "not generated" in section.records[0].data
-    assert "No validation record on generated photos" in section.missing[0]
+    assert "No validation record on generated photos" in section.missing[-1]
 
     shipped[SHIPPED] = record
     assert [r.heading for r in shipped_error_rates(findings).records] == ["Real photos", "Synthetic photos"]
