@@ -1,7 +1,7 @@
 """Peak memory of ``forensics analyze`` on a very large photo, the whole process tree counted once.
 
 Usage: ``python benchmarks/memory.py [--runs 3] [--mp 100] [--format json] [--photo FILE] [--jobs N]
-[--baseline TREE]``
+[--baseline TREE] [--per-detector]``
 
 Without ``--photo``, a synthetic authentic JPEG of ``--mp`` megapixels (4:3,
 quality 90: a photo of a building from the lens plugin's scene model, scaled
@@ -15,6 +15,9 @@ and range over the runs of the tree's peak PSS, of the command's own peak RSS
 (``VmHWM``), and of the wall time. Targets: at most 2.5 GB at 100 MP (issue
 16), 1 GB at 12 MP (issue 17). ``--baseline`` names another source tree of
 this project, measured in the same run as ``benchmarks/startup.py`` does.
+``--per-detector`` runs each installed detector alone (``--detectors NAME
+--jobs 1``) and prints its tree peak and that peak per megapixel of the
+photo: the figures the README states.
 """
 
 from __future__ import annotations
@@ -129,6 +132,7 @@ def main() -> None:
     parser.add_argument("--baseline", type=Path, help="Source tree of the version to compare with.")
     parser.add_argument("--jobs", type=int,
                         help="analyze's --jobs for this tree (default: analyze's own; a baseline has none).")
+    parser.add_argument("--per-detector", action="store_true", help="Each detector alone, its peak per megapixel.")
     args = parser.parse_args()
     target = args.photo or photo(args.mp)
     from PIL import Image
@@ -137,6 +141,9 @@ def main() -> None:
     with Image.open(target) as im:
         size = f"{im.width}x{im.height} ({im.width * im.height / 1e6:.0f} MP)"
     print(f"{target.name}: {size}, --format {args.format}, {args.runs} runs in fresh processes")
+    if args.per_detector:
+        per_detector(target, im.width * im.height / 1e6, args)
+        return
     print(f"{'':<40}{'median':>9}{'min':>9}{'max':>9}")
     trees = [("", None)] + ([("baseline: ", args.baseline.resolve())] if args.baseline else [])
     for prefix, tree in trees:
@@ -151,6 +158,19 @@ def main() -> None:
                            ("wall_s", "wall time s")):
             v = [r[key] for r in runs]
             print(f"{prefix + label:<40}{statistics.median(v):>9.0f}{min(v):>9.0f}{max(v):>9.0f}")
+
+
+def per_detector(target: Path, mp: float, args: argparse.Namespace) -> None:
+    from forensics_core.plugins import PluginHost
+
+    names = sorted(PluginHost.from_entry_points().detectors)
+    print(f"{'detector alone (--jobs 1)':<28}{'tree MB':>9}{'MB/MP':>8}{'wall s':>8}  (medians)")
+    with tempfile.TemporaryDirectory() as home:
+        env = {**os.environ, "FORENSICS_HOME": home}
+        for name in names:
+            runs = [one_run(target, args.format, env, ["--detectors", name, "--jobs", "1"]) for _ in range(args.runs)]
+            tree = statistics.median(r["tree_mb"] for r in runs)
+            print(f"{name:<28}{tree:>9.0f}{tree / mp:>8.0f}{statistics.median(r['wall_s'] for r in runs):>8.1f}")
 
 
 if __name__ == "__main__":

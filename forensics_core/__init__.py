@@ -18,6 +18,7 @@ from .findings import (
     VerdictLabel,
 )
 from .hookspecs import hookimpl
+from .reading import SMALL, FileRefused, read_limited
 
 try:
     __version__ = version("forensics")
@@ -57,6 +58,9 @@ def __getattr__(name: str):
 
 __all__ = [
     "ENTRY_POINT_GROUP",
+    "FileRefused",
+    "SMALL",
+    "read_limited",
     "DetectorFinding",
     "DetectorResult",
     "DetectorSpec",

@@ -24,7 +24,7 @@ from functools import cached_property
 from pathlib import Path
 
 import numpy as np
-from PIL import ExifTags, Image, ImageFile, TiffImagePlugin, UnidentifiedImageError
+from PIL import AvifImagePlugin, ExifTags, Image, ImageFile, TiffImagePlugin, UnidentifiedImageError, features
 from PIL import __version__ as _PILLOW_VERSION
 
 from . import exiftool
@@ -349,6 +349,7 @@ def _open_checked(data: bytes, max_pixels: int) -> tuple[Image.Image, list[Conta
         try:
             img = Image.open(io.BytesIO(data), formats=ALLOWED_FORMATS)
         except UnidentifiedImageError:
+            _refuse_unreadable_avif(data)
             with Image.open(io.BytesIO(data)) as probe:
                 fmt = probe.format
             raise EvidenceError(
@@ -362,6 +363,34 @@ def _open_checked(data: bytes, max_pixels: int) -> tuple[Image.Image, list[Conta
         others = _other_images(img, max_pixels)
         img.load()
         return img, others
+
+
+def _avif_brands(data: bytes) -> set[bytes]:
+    """The major and compatible brands of an ISO-BMFF ``ftyp`` box at the start of ``data`` naming AVIF."""
+    if len(data) < 16 or data[4:8] != b"ftyp":
+        return set()
+    size = min(struct.unpack(">I", data[:4])[0], len(data), 4096)
+    brands = {data[8:12]} | {data[i:i + 4] for i in range(16, size - 3, 4)}
+    return brands & {b"avif", b"avis"}
+
+
+def _refuse_unreadable_avif(data: bytes) -> None:
+    """Refuse, with the decoder's reason, an AVIF that Pillow could not identify; return for anything else.
+
+    Pillow reports every AVIF that libavif refuses as "cannot identify", which
+    would call a photo from an early encoder "not an image"; libavif's own
+    message is the one the examiner needs.
+    """
+    if not _avif_brands(data) or not features.check("avif"):
+        return
+    try:
+        AvifImagePlugin.AvifImageFile(io.BytesIO(data)).close()
+    except (SyntaxError, ValueError, RuntimeError, OSError) as exc:
+        reason = _safe_text(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
+        raise EvidenceError(
+            f"an AVIF file its decoder refuses (libavif {features.version('avif')}: {reason}); files from some "
+            f"early AVIF encoders break rules of the container that today's decoders enforce, and it is not "
+            f"analysed") from None
 
 
 def _mpo_kind(img: Image.Image, index: int) -> str:
@@ -430,10 +459,17 @@ def _other_images(img: Image.Image, max_pixels: int) -> list[ContainedImage]:
     return out
 
 
-def _decoder_note(img: Image.Image) -> str | None:
+def _decoder_note(img: Image.Image, orientation: int | None) -> str | None:
     if img.format == "HEIF" and img.info.get("original_orientation") not in (None, 1):
         return (f"libheif applies a HEIF file's rotation and mirror properties when it decodes; the EXIF orientation "
                 f"was {img.info['original_orientation']} and the analysed grid is the image as displayed")
+    if img.format == "AVIF" and orientation not in (None, 1):
+        # Pillow's AVIF decoder leaves the grid as stored and reports the
+        # container's irot/imir properties as the EXIF orientation, over any
+        # orientation the file's EXIF holds.
+        return (f"the AVIF decoder reports the file's rotation and mirror properties (irot, imir) as orientation "
+                f"{orientation}, in place of any EXIF orientation; the analysed grid is the image as stored, "
+                f"before that rotation, and a viewer displays it rotated")
     return None
 
 
@@ -539,7 +575,7 @@ def load_evidence(path: str | os.PathLike[str], *, max_pixels: int = DEFAULT_MAX
         quant = getattr(img, "quantization", None) or {}
         fmt, (width, height), mode = str(img.format), img.size, img.mode
         icc_profile = bool(img.info.get("icc_profile"))
-        notes = [_decoder_note(img)]
+        notes = [_decoder_note(img, exif.orientation)]
         with warnings.catch_warnings(record=True) as decoding, _c_messages(printed):
             warnings.simplefilter("always")
             try:

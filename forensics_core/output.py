@@ -24,15 +24,14 @@ class Placement:
     Attributes
     ----------
     folder : Path
-    action : {"new", "kept", "replace", "in_place"}
+    action : {"new", "kept", "replace"}
         ``new``: an empty or absent folder, which the bundle, made whole
         beside it, takes by one rename (see :func:`publish`); ``kept``: it
         already holds this photo's outputs made with the same settings, left
         untouched; ``replace``: it holds this photo's outputs and ``--force``
-        asked for them to be replaced, as a whole and atomically;
-        ``in_place``: the outputs are written straight into the folder, which
-        the caller alone writes (``forensics batch`` holds the output
-        folder's lock).
+        asked for them to be replaced, as a whole and atomically (``forensics
+        batch`` replaces whatever a folder it owns holds: an unfinished
+        bundle, a link to a duplicate's).
     """
 
     folder: Path
@@ -53,6 +52,11 @@ def _free(folder: Path) -> bool:
     if not os.path.lexists(folder):
         return True
     return folder.is_dir() and not folder.is_symlink() and not any(folder.iterdir())
+
+
+def owned_placement(folder: Path) -> Placement:
+    """The placement of a bundle in a folder the caller owns (``forensics batch``), whatever the folder holds."""
+    return Placement(folder, "new" if _free(folder) else "replace")
 
 
 def place_outputs(out_dir: Path, photo: Path, findings: Findings, files: set[str], used: set[str],

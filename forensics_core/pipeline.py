@@ -141,10 +141,6 @@ def examine_photo(photo: Path, place: Callable[[Evidence, Findings], Placement],
     placement = place(evidence, findings)
     if placement.action == "kept":
         return Examined(findings, placement.folder, placement.folder / FINDINGS_NAME, kept=True)
-    if placement.action == "in_place":
-        path = write_findings(findings, placement.folder)
-        refused = write_report(findings, evidence, placement.folder, host, report) if report is not None else []
-        return Examined(findings, placement.folder, path, refused)
     # The bundle is made whole beside its folder, then renamed into place, so
     # an interruption leaves the folder as it was, never half a bundle or a
     # mixture of two.

@@ -27,6 +27,7 @@ from __future__ import annotations
 import asyncio
 import hashlib
 import json
+import os
 import stat
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -37,9 +38,10 @@ from pathlib import Path
 from asn1crypto import cms
 from asn1crypto import x509 as asn1_x509
 
-from .certificates import outside_validity, read_certificates
-from .manifest import FINDINGS_NAME, MANIFEST_NAME, PDF_NAME, SIGNATURE_NAME, Manifest, sha256_file
+from .certificates import is_self_signed, outside_validity, read_certificates
+from .manifest import FINDINGS_NAME, MANIFEST_NAME, PDF_NAME, SIGNATURE_NAME, FileEntry, Manifest
 from .reading import DOCUMENT, MANIFEST, SMALL, FileRefused, read_limited
+from .text import visible
 from .trust import trusted
 
 
@@ -178,6 +180,25 @@ def _check_pdf(path: Path, signer: asn1_x509.Certificate | None, result: Verific
         result.passed.append(f"{name}: certification signature valid, covers the entire file")
 
 
+def _content_problem(path: Path, entry: FileEntry) -> str | None:
+    """Why the file at ``path`` is not the one ``entry`` records, or None; a file of another size is not hashed.
+
+    The checks are made on the open descriptor, so a FIFO or a device put in
+    the file's place never blocks or floods the hash.
+    """
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    with os.fdopen(fd, "rb") as fh:
+        st = os.fstat(fh.fileno())
+        if not stat.S_ISREG(st.st_mode):
+            return "not a regular file (a folder, FIFO or device in its place)"
+        if st.st_size != entry.size:
+            return f"has {st.st_size:,} bytes, not the {entry.size:,} the manifest records (altered)"
+        digest = hashlib.sha256()
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(chunk)
+    return None if digest.hexdigest() == entry.sha256 else "SHA-256 does not match the manifest (altered)"
+
+
 def _check_files(folder: Path, manifest: Manifest, result: Verification) -> None:
     listed = {f.name for f in manifest.files}
     for entry in manifest.files:
@@ -185,12 +206,12 @@ def _check_files(folder: Path, manifest: Manifest, result: Verification) -> None
         try:
             if Path(entry.name).is_absolute() or ".." in Path(entry.name).parts:
                 result.fail(entry.name, "manifest names a file outside the bundle")
-            elif not path.is_file():
-                result.fail(entry.name, "missing")
-            elif sha256_file(path) != entry.sha256:
-                result.fail(entry.name, "SHA-256 does not match the manifest (altered)")
+            elif problem := _content_problem(path, entry):
+                result.fail(entry.name, problem)
             else:
                 result.passed.append(f"{entry.name}: SHA-256 matches")
+        except FileNotFoundError:
+            result.fail(entry.name, "missing")
         except OSError as exc:
             # A name the file system refuses (too long, say) fails this check only; the others still run.
             result.fail(entry.name, f"cannot be read: {exc.strerror or exc}")
@@ -352,7 +373,21 @@ def verify_bundle(folder: Path, evidence: Path | None = None, trust: Path | Sequ
     _check_trust(signer, others, anchors, not pdf_failed, result)
     if evidence is not None:
         _check_evidence(evidence, manifest, result)
-    if manifest.signer.get("self_signed"):
-        result.notes.append(f"the signing certificate is self-signed ({manifest.signer.get('subject')}, "
-                            f"SHA-256 {manifest.signer.get('sha256_fingerprint')})")
+    _check_signer_record(signer, manifest, result)
     return result
+
+
+def _check_signer_record(signer: asn1_x509.Certificate, manifest: Manifest, result: Verification) -> None:
+    """The manifest's description of its signer is the certificate's, and what is said of the signer comes from it."""
+    from cryptography import x509
+
+    cert = x509.load_der_x509_certificate(signer.dump())
+    subject, self_signed = cert.subject.rfc4514_string(), is_self_signed(cert)
+    recorded = manifest.signer
+    if recorded.get("subject") != subject or bool(recorded.get("self_signed")) != self_signed:
+        result.fail(MANIFEST_NAME, f"describes its signer as '{visible(str(recorded.get('subject')))}' "
+                                   f"(self-signed: {bool(recorded.get('self_signed'))}), but the certificate that "
+                                   f"signed it is '{visible(subject)}' (self-signed: {self_signed})")
+    if self_signed:
+        result.notes.append(f"the signing certificate is self-signed ({visible(subject)}, "
+                            f"SHA-256 {_fingerprint(signer)})")

@@ -152,16 +152,6 @@ def expected_parameters(detectors: list[str], detector_params: dict[str, dict[st
     return {k: values[k] for k in _COMPARED_PARAMETERS}
 
 
-def start_fresh(folder: Path) -> None:
-    """Remove the completion markers before a folder is rewritten.
-
-    Until the new manifest and its signature are in place, the folder then
-    reads as unfinished, whatever the old files say.
-    """
-    for name in (SIGNATURE_NAME, MANIFEST_NAME):
-        (folder / name).unlink(missing_ok=True)
-
-
 def _in_use(folder: Path) -> bool:
     """True when another process holds ``folder`` locked: an ``analyze`` making a bundle in it
     (:func:`forensics_core.output.staging_folder`)."""

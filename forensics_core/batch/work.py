@@ -22,14 +22,13 @@ from typing import Any
 from ..analysis import Options
 from ..evidence import Evidence, EvidenceError
 from ..findings import Findings
-from ..output import Placement
+from ..output import Placement, owned_placement
 from ..pipeline import ReportError, ReportSettings, examine_photo
 from ..plugins import PluginHost, one_line
 from ..report.render import ReportOptions
 from ..defaults import PASSWORD_ENV
 from ..signing import ExaminerKey, SigningError, load_key
 from .plan import Job
-from .resume import start_fresh
 
 _state: dict[str, Any] = {}
 
@@ -139,8 +138,9 @@ def _allow_detector_children() -> None:
 def process_photo(job: Job, settings: Settings) -> PhotoOutcome:
     """Analyse one photo and write its outputs; never raises.
 
-    The photo must still have the bytes the batch hashed; the folder's old
-    completion markers are removed before anything is written into it.
+    The photo must still have the bytes the batch hashed. The bundle is made
+    in a hidden folder and renamed onto the photo's, whatever that holds, so
+    a worker killed at any moment leaves the folder as it was.
     """
     started = time.perf_counter()
     folder = Path(job.folder)
@@ -148,9 +148,7 @@ def process_photo(job: Job, settings: Settings) -> PhotoOutcome:
     def place(evidence: Evidence, findings: Findings) -> Placement:
         if evidence.info.sha256 != job.sha256:
             raise EvidenceError("changed while the batch ran (its SHA-256 is not the one taken at the start)")
-        folder.mkdir(parents=True, exist_ok=True)
-        start_fresh(folder)
-        return Placement(folder, "in_place")
+        return owned_placement(folder)
 
     done = None
     error: str | None = None

@@ -28,7 +28,7 @@ from typing import Any
 
 import c2pa
 
-from forensics_core import DetectorResult, Evidence, Status
+from forensics_core import SMALL, DetectorResult, Evidence, Status, read_limited
 
 from .credentials import AI_SOURCE_TYPES, Credentials, read
 
@@ -41,11 +41,11 @@ EDITS = ("c2pa.edited", "c2pa.filtered", "c2pa.color_adjustments", "c2pa.cropped
 
 def _sidecar(evidence: Evidence, params: Mapping[str, Any]) -> tuple[bytes | None, str | None]:
     path = evidence.path.with_suffix(".c2pa")
-    if not params["read_sidecar"] or not path.is_file() or path.stat().st_size > int(params["max_sidecar_bytes"]):
+    if not params["read_sidecar"]:
         return None, None
-    with path.open("rb") as f:
-        data = f.read(int(params["max_sidecar_bytes"]) + 1)
-    if len(data) > int(params["max_sidecar_bytes"]):
+    try:
+        data = read_limited(path, int(params["max_sidecar_bytes"]))
+    except OSError:
         return None, None
     return data, hashlib.sha256(data).hexdigest()
 
@@ -129,7 +129,10 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
     """
     sidecar, sidecar_sha = _sidecar(evidence, params)
     anchors_file = str(params["trust_anchors_file"])
-    anchors = Path(anchors_file).read_text(encoding="ascii") if anchors_file else None
+    try:
+        anchors = read_limited(Path(anchors_file), SMALL).decode("ascii") if anchors_file else None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ValueError(f"the trust anchors file cannot be used: {exc}") from None
     details: dict[str, Any] = {"c2pa": f"{version('c2pa-python')} (c2pa-rs {c2pa.sdk_version()})",
                                "sidecar_sha256": sidecar_sha,
                                "trust_anchors_sha256": anchors and hashlib.sha256(anchors.encode()).hexdigest()}

@@ -155,6 +155,8 @@ def test_a_run_killed_midway_loses_nothing_finished_and_the_rerun_completes_it(t
     assert not any(alive(pid) for pid in workers)  # the lifeline took the workers down with the command
     finished = {p.parent.name: p.stat().st_mtime_ns for p in out.glob("*/manifest.json.p7s")}
     assert finished and not (out / "summary.json").exists()
+    visible = {p.name for p in out.iterdir() if p.is_dir() and not p.name.startswith(".")}
+    assert visible == set(finished)  # no half bundle: unfinished ones are hidden staging folders
     # What a kill in the middle of a write leaves (write_atomic's temporary name), in an unfinished folder.
     unfinished = next(p.stem for p in sorted(photos.iterdir()) if p.stem not in finished)
     (out / unfinished).mkdir(exist_ok=True)
@@ -172,6 +174,26 @@ def test_a_run_killed_midway_loses_nothing_finished_and_the_rerun_completes_it(t
     for row in doc["photos"]:
         check = verify_bundle(Path(row["output"]), evidence=Path(row["photo"]))
         assert check.ok, (row["photo"], check.problems)
+
+
+def test_a_batch_killed_while_a_report_is_made_leaves_no_visible_half_bundle(tmp_path):
+    photos = tmp_path / "in"
+    photos.mkdir()
+    (photos / "p.jpg").write_bytes(tiny_jpeg(0))
+    out = tmp_path / "out"
+    proc = popen("batch", photos, "--out", out, "--format", "json,html", "--workers", "1",
+                 "--param", "steady.report_seconds=30", env=fixture_env())
+    deadline = time.monotonic() + 60
+    while not list(out.glob(".p.*.tmp/findings.json")) + list(out.glob("p/findings.json")):
+        assert time.monotonic() < deadline and proc.poll() is None
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert not (out / "p").exists()  # the findings wait in a hidden staging folder until the bundle is whole
+
+    rerun = run("batch", photos, "--out", out, "--format", "json,html", env=fixture_env())
+    assert rerun.returncode == 0, rerun.stderr
+    assert (out / "p" / "manifest.json.p7s").is_file() and not temp_files(out)
 
 
 def test_a_worker_killed_mid_photo_is_retried_once_then_the_photo_fails(tmp_path):

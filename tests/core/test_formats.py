@@ -132,3 +132,39 @@ def test_a_tiff_whose_second_page_is_broken_is_analysed_on_its_first(chessboard,
     ev = load_evidence(path)
     assert ev.pixels.shape[:2] == (480, 640)
     assert ev.info.other_images and ev.info.other_images[0].kind.startswith("unreadable page")
+
+
+def test_an_avif_rotation_property_is_named_and_the_stored_grid_analysed(chessboard, tmp_path):
+    exif = Image.Exif()
+    exif[0x0112] = 6  # Pillow writes it as the container's irot and imir properties
+    path = tmp_path / "rotated.avif"
+    chessboard.save(path, "AVIF", quality=85, exif=exif.tobytes())
+    ev = load_evidence(path)
+    assert ev.pixels.shape == (480, 640, 3) and ev.info.orientation == 6
+    assert "irot" in ev.info.decoder_note and "as stored" in ev.info.decoder_note
+
+
+def _with_a_second_ipma(avif: bytes) -> bytes:
+    """``avif`` with its property-association box repeated, as an early encoder wrote files libavif now refuses."""
+    def box(data, start, kind):
+        at = data.index(kind, start) - 4
+        return at, int.from_bytes(data[at:at + 4], "big")
+    meta, meta_size = box(avif, 0, b"meta")
+    iprp, iprp_size = box(avif, meta, b"iprp")
+    ipma, ipma_size = box(avif, iprp, b"ipma")
+    extra = avif[ipma:ipma + ipma_size]
+    out = bytearray(avif[:ipma + ipma_size] + extra + avif[ipma + ipma_size:])
+    for at, size in ((meta, meta_size), (iprp, iprp_size)):
+        out[at:at + 4] = (size + len(extra)).to_bytes(4, "big")
+    return bytes(out)
+
+
+def test_an_avif_its_decoder_refuses_is_refused_with_the_decoders_reason(chessboard, tmp_path):
+    buffer = io.BytesIO()
+    chessboard.save(buffer, "AVIF", quality=85)
+    path = tmp_path / "early-encoder.avif"
+    path.write_bytes(_with_a_second_ipma(buffer.getvalue()))
+    out = run("analyze", path, "--out", tmp_path / "out", "--format", "json")
+    assert out.returncode == 1
+    line = out.stderr.strip()
+    assert "\n" not in line and "AVIF" in line and "libavif" in line and "not an image" not in line

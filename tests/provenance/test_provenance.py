@@ -3,6 +3,7 @@
 import datetime
 import io
 import json
+import os
 import time
 
 import c2pa
@@ -108,6 +109,18 @@ def test_trust_anchors_make_the_signer_trusted(tmp_path, chain):
     (tmp_path / "anchors.pem").write_text(chain["root"])
     r = _finding(tmp_path, signed, trust_anchors_file=str(tmp_path / "anchors.pem"))
     assert r.details["credentials"]["state"] == "Trusted" and "on the examiner's trust list" in r.summary
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device"])
+def test_a_trust_anchors_file_that_is_no_regular_file_is_refused_at_once(tmp_path, chain, kind):
+    signed, _ = _sign(chain, [{"action": "c2pa.created", "digitalSourceType": CAPTURE}])
+    anchors = tmp_path / "anchors.pem"
+    if kind == "fifo":
+        os.mkfifo(anchors)
+    else:
+        anchors.symlink_to("/dev/zero")
+    with pytest.raises(ValueError, match="trust anchors file cannot be used: .* not a regular file"):
+        _finding(tmp_path, signed, trust_anchors_file=str(anchors))
 
 
 def test_content_changed_after_signing_breaks_the_binding(tmp_path, chain):

@@ -1,7 +1,8 @@
 """Test-only plugins for the batch tests, found through the entry points of the
 ``batch_fixtures`` distribution beside this file (put this folder on PYTHONPATH).
 
-``steady``: a detector that takes ``seconds`` and reports the mean luma.
+``steady``: a detector that takes ``seconds`` and reports the mean luma; its
+report section takes ``report_seconds``.
 ``killer``: kills the worker that analyses a photo whose name contains
 ``$BATCH_TEST_KILL``, after noting the attempt in ``$BATCH_TEST_LOG``. Its
 metadata hook runs contained, in a child the worker forks, so the worker is
@@ -19,7 +20,7 @@ class Steady:
     @hookimpl
     def forensics_register_detectors(self):
         return [DetectorSpec("steady", "1.0.0", "Test detector: mean luma after a fixed delay.",
-                             default_params={"seconds": 0.0})]
+                             default_params={"seconds": 0.0, "report_seconds": 0.0})]
 
     @hookimpl
     def forensics_analyze(self, detector, evidence, params):
@@ -29,6 +30,13 @@ class Steady:
         mean = float(evidence.luma.mean())
         return DetectorResult(Status.OK, f"Mean luma {mean:.3f}.", score=mean, p_value=0.5,
                               details={"mean_luma": mean})
+
+    @hookimpl
+    def forensics_report_section(self, finding, evidence):
+        if finding.name != "steady":
+            return None
+        time.sleep(float(finding.parameters["report_seconds"]))
+        return None
 
 
 class Killer:
