@@ -52,7 +52,7 @@ from forensics_core import PROCESSING_KEY, DetectorResult, Evidence, Processing,
 
 from .earlier_grid import CELLS, LEAD, MIN_CELL_SHARE, MIN_CELL_SHARE_ALL, EarlierGrid, earlier_grid
 from .lattice import FREQUENCIES, MIN_FREQUENCIES, block_any, block_coefficients, estimate_steps, missing_regions, \
-    off_lattice
+    off_lattice, on_file_steps
 from .luminance import MIN_SIDE, Luminance, luminance
 from .nfa import finite_log10, log10_binomial_tail, nfa_text
 from .regions import P_VOTE, W, Region, find_regions, log10_n_tests, min_region_pixels
@@ -187,6 +187,8 @@ def _lattice_stage(lum: Luminance, main: int, details: dict[str, Any], cell: int
                             else "the pixels are not 8-bit")
         return []
     coef = block_coefficients(y, origin)
+    if file_steps is not None:
+        coef = on_file_steps(coef, file_steps)
     hw = coef.shape[:2]
     clipped = lum.clipped if lum.clipped is not None else np.zeros(y.shape, bool)
     usable = ~block_any(clipped, origin, hw)
