@@ -39,7 +39,7 @@ from asn1crypto import cms
 from asn1crypto import x509 as asn1_x509
 
 from .certificates import is_self_signed, outside_validity, read_certificates
-from .manifest import FINDINGS_NAME, MANIFEST_NAME, PDF_NAME, SIGNATURE_NAME, FileEntry, Manifest
+from .manifest import FINDINGS_NAME, MANIFEST_NAME, PDF_NAME, SIGNATURE_NAME, Manifest
 from .reading import DOCUMENT, MANIFEST, SMALL, FileRefused, read_limited
 from .text import visible
 from .trust import trusted
@@ -180,23 +180,25 @@ def _check_pdf(path: Path, signer: asn1_x509.Certificate | None, result: Verific
         result.passed.append(f"{name}: certification signature valid, covers the entire file")
 
 
-def _content_problem(path: Path, entry: FileEntry) -> str | None:
-    """Why the file at ``path`` is not the one ``entry`` records, or None; a file of another size is not hashed.
+def _digests(path: Path, size: int | None, algorithms: Sequence[str]) -> tuple[int | None, list[str]]:
+    """The size of ``path`` if it is a regular file (else None), and its hex digests if that size is ``size``.
 
     The checks are made on the open descriptor, so a FIFO or a device put in
-    the file's place never blocks or floods the hash.
+    the file's place never blocks or floods the hash, and a file of another
+    size is not hashed at all (no digests).
     """
     fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
     with os.fdopen(fd, "rb") as fh:
         st = os.fstat(fh.fileno())
         if not stat.S_ISREG(st.st_mode):
-            return "not a regular file (a folder, FIFO or device in its place)"
-        if st.st_size != entry.size:
-            return f"has {st.st_size:,} bytes, not the {entry.size:,} the manifest records (altered)"
-        digest = hashlib.sha256()
+            return None, []
+        if size is not None and st.st_size != size:
+            return st.st_size, []
+        hashes = [hashlib.new(name) for name in algorithms]
         for chunk in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(chunk)
-    return None if digest.hexdigest() == entry.sha256 else "SHA-256 does not match the manifest (altered)"
+            for h in hashes:
+                h.update(chunk)
+    return st.st_size, [h.hexdigest() for h in hashes]
 
 
 def _check_files(folder: Path, manifest: Manifest, result: Verification) -> None:
@@ -206,10 +208,17 @@ def _check_files(folder: Path, manifest: Manifest, result: Verification) -> None
         try:
             if Path(entry.name).is_absolute() or ".." in Path(entry.name).parts:
                 result.fail(entry.name, "manifest names a file outside the bundle")
-            elif problem := _content_problem(path, entry):
-                result.fail(entry.name, problem)
             else:
-                result.passed.append(f"{entry.name}: SHA-256 matches")
+                found, digests = _digests(path, entry.size, ("sha256",))
+                if found is None:
+                    result.fail(entry.name, "not a regular file (a folder, FIFO or device in its place)")
+                elif not digests:
+                    result.fail(entry.name, f"has {found:,} bytes, not the {entry.size:,} the manifest records "
+                                            f"(altered)")
+                elif digests[0] != entry.sha256:
+                    result.fail(entry.name, "SHA-256 does not match the manifest (altered)")
+                else:
+                    result.passed.append(f"{entry.name}: SHA-256 matches")
         except FileNotFoundError:
             result.fail(entry.name, "missing")
         except OSError as exc:
@@ -221,34 +230,19 @@ def _check_files(folder: Path, manifest: Manifest, result: Verification) -> None
 
 
 def _check_evidence(evidence: Path, manifest: Manifest, result: Verification) -> None:
-    """Hash the evidence in chunks, after checking it is a regular file of the recorded size.
-
-    A FIFO would block the read and a device such as ``/dev/zero`` never
-    ends; neither can be the evidence, so both are refused before reading.
-    """
+    """Hash the evidence in chunks, once it is known to be a regular file of the recorded size."""
     recorded = manifest.evidence
     try:
-        st = evidence.stat()
+        found, digests = _digests(evidence, recorded.get("size"), ("sha256", "sha512"))
     except OSError as exc:
         result.fail("evidence", f"cannot read {evidence}: {exc.strerror or exc}")
         return
-    if not stat.S_ISREG(st.st_mode):
+    if found is None:
         result.fail("evidence", f"{evidence} is not a regular file")
-        return
-    if recorded.get("size") is not None and st.st_size != recorded["size"]:
-        result.fail("evidence", f"{evidence.name} has {st.st_size:,} bytes, not the {recorded['size']:,} recorded "
+    elif not digests:
+        result.fail("evidence", f"{evidence.name} has {found:,} bytes, not the {recorded['size']:,} recorded "
                                 f"for {recorded.get('name')}")
-        return
-    sha256, sha512 = hashlib.sha256(), hashlib.sha512()
-    try:
-        with evidence.open("rb") as f:
-            for chunk in iter(lambda: f.read(1 << 20), b""):
-                sha256.update(chunk)
-                sha512.update(chunk)
-    except OSError as exc:
-        result.fail("evidence", f"cannot read {evidence}: {exc.strerror or exc}")
-        return
-    if sha256.hexdigest() != recorded.get("sha256") or sha512.hexdigest() != recorded.get("sha512"):
+    elif digests != [recorded.get("sha256"), recorded.get("sha512")]:
         result.fail("evidence", f"{evidence.name} does not match the SHA-256/SHA-512 recorded for {recorded.get('name')}")
     else:
         result.passed.append(f"evidence: {evidence.name} matches SHA-256 and SHA-512")
