@@ -56,7 +56,8 @@ from .lattice import FREQUENCIES, MIN_FREQUENCIES, block_any, block_coefficients
 from .luminance import MIN_SIDE, Luminance, luminance
 from .nfa import finite_log10, log10_binomial_tail, nfa_text
 from .regions import P_VOTE, W, Region, find_regions, log10_n_tests, min_region_pixels
-from .resampling import MIN_REGIONS, MIN_SPREAD_DEG, PERP_TOL, PROFILE_REL, PROFILE_TOL, RadialWarp, radial_warp
+from .resampling import MIN_REGIONS, MIN_SPREAD_DEG, PERP_TOL, PROFILE_REL, PROFILE_TOL, RadialWarp, field_explained, \
+    radial_warp
 from .votes import grid_code, grid_origin, vote_map
 from .zeros import ZERO_THRESHOLD, flat_blocks, zero_counts
 
@@ -187,12 +188,13 @@ def _lattice_stage(lum: Luminance, main: int, details: dict[str, Any], cell: int
                             else "the pixels are not 8-bit")
         return []
     coef = block_coefficients(y, origin)
-    if file_steps is not None:
-        coef = on_file_steps(coef, file_steps)
     hw = coef.shape[:2]
     clipped = lum.clipped if lum.clipped is not None else np.zeros(y.shape, bool)
     usable = ~block_any(clipped, origin, hw)
-    lat = estimate_steps(coef, usable, file_steps)
+    # The lattice must hold on the values the file stores; a block is flagged off it only beyond what the
+    # decoder's rounding may move a value, since processing after the first compression (a tone curve) leaves
+    # an earlier lattice scaled a little, which rounding alone then spreads onto the neighbouring multiples.
+    lat = estimate_steps(coef if file_steps is None else on_file_steps(coef, file_steps), usable, file_steps)
     record.update({"steps": lat.steps.tolist(), "n_frequencies": lat.n_frequencies,
                    "on_share": round(float(np.median(lat.share[lat.steps > 0])), 3) if lat.n_frequencies else None,
                    "blocks": int(hw[0] * hw[1]), "clipped_blocks": int((~usable).sum())})
@@ -456,7 +458,10 @@ def analyse_luminance(lum: Luminance, params: Mapping[str, Any],
     # 100 where the file's own compression leaves few zeros, it is the only candidate.
     origins = ([grid_origin(main)] if significant else []) + ([(0, 0)] if lum.jpeg else [])
     warp = radial_warp([f[1] for f in rest], origins, shape) if origins else None
-    warped = set() if warp is None else {id(rest[i]) for i in warp.explained}
+    warped = set()
+    if warp is not None:
+        warp, by_field = field_explained(warp, [f[1] for f in rest], labels)
+        warped = {id(rest[i]) for i in by_field}
     explained_ids = cropped | warped
     evidence = [f for f in meaningful if id(f) not in explained_ids]
     # Without a detection, the strongest candidate is kept to show how far it was from one.

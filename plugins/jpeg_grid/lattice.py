@@ -16,7 +16,7 @@ null does not depend on the scene's texture, noise or the camera's quality:
 only rounding and clipping move an untouched block off its lattice.
 
 Steps. (1) The DCT of every block on the main grid (``block_coefficients``),
-for a JPEG put back on the file's own steps (``on_file_steps``).
+for a JPEG put back on the file's own steps (``on_file_steps``) for step (2).
 (2) Per low frequency, the step of an earlier lattice, if any: a step
 whose lattice holds at least 80 % of the coefficients, significantly more
 than the same histogram smoothed over one step would put near it
@@ -185,7 +185,14 @@ def on_file_steps(coef: np.ndarray, file_steps: np.ndarray, sigma: float = ROUND
     frequencies that way (80.7 % of values "on", from 40 % even multiples).
     Each value is therefore put back on its nearest multiple of ``q`` where
     the rounding cannot cross half a step (``q / 2 > 3 sigma``, i.e. ``q >= 3``
-    for the default sigma); finer steps are left as decoded.
+    for the default sigma); finer steps are left as decoded. This decides
+    whether a lattice holds (:func:`estimate_steps`); blocks are judged off
+    it on the decoded values (:func:`off_lattice`), whose tolerance also
+    covers an earlier lattice scaled a little by a tone curve applied after
+    the first compression (measured: levels and gamma saved at quality 91
+    and 93 had 6,944 and 550 blocks flagged on stored values, against 1,598
+    and 617 on decoded ones, and regions of NFA 10^-8 where a tone curve's
+    slope changed).
 
     Parameters
     ----------

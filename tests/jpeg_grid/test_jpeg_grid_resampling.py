@@ -39,3 +39,49 @@ def test_two_regions_or_regions_in_one_direction_are_not_a_warp():
     assert radial_warp([_region(0, 0, 0.5, 9.0), _region(1, 120, 0.6, 11.0)], [(0, 0)], SHAPE) is None
     one_side = [_region(i, 10 + 5 * i, 0.5 + 0.03 * i, 9.0) for i in range(5)]
     assert radial_warp(one_side, [(0, 0)], SHAPE) is None
+
+
+def _nearest_neighbour_field(a: float, b: float, shape=(600, 800)) -> tuple[np.ndarray, list[Region]]:
+    """Labels and regions of the grids a nearest-neighbour warp ``D = a rho^3 + b rho`` leaves, one per patch.
+
+    The shift is floored, as a remap on fixed-point coordinates does: a patch's centre then lies off the radius.
+    """
+    from scipy import ndimage
+
+    h, w = shape
+    ys, xs = np.mgrid[0:h, 0:w].astype(float)
+    vx, vy = xs - (w - 1) / 2, ys - (h - 1) / 2
+    r = np.maximum(np.hypot(vx, vy), 1e-9)
+    rho = r / np.hypot((w - 1) / 2, (h - 1) / 2)
+    d = (a * rho**3 + b * rho) / r
+    codes = 8 * (np.floor(d * vy).astype(int) % 8) + np.floor(d * vx).astype(int) % 8
+    labels = np.zeros(shape, np.int32)
+    regions = []
+    for code in np.unique(codes):
+        if code == 0:
+            continue
+        parts, n = ndimage.label(codes == code)
+        for k, box in enumerate(ndimage.find_objects(parts), start=1):
+            mask = parts[box] == k
+            if mask.sum() < 400:
+                continue
+            label = len(regions) + 1
+            labels[box][mask] = label
+            regions.append(Region(label, int(code), int(mask.sum()),
+                                  (box[1].start, box[0].start, box[1].stop - 1, box[0].stop - 1), -float(mask.sum())))
+    regions.sort(key=lambda reg: reg.log10_nfa)
+    return labels, regions
+
+
+def test_an_established_warp_is_refitted_and_judged_pixel_by_pixel_and_a_paste_stays_foreign():
+    from forensics_plugins.jpeg_grid.resampling import field_explained
+
+    labels, regions = _nearest_neighbour_field(40.0, -15.0)  # with the zoom to fill the frame: up to 25 px
+    paste = Region(len(regions) + 1, grid_code(3, 5), 3600, (100, 80, 159, 139), -50.0)
+    labels[80:140, 100:160] = paste.label
+    regions = [paste] + regions
+    warp = radial_warp(regions, [(0, 0)], labels.shape)
+    assert warp is not None and len(warp.explained) < len(regions) - 10  # by the regions' centres
+    refitted, explained = field_explained(warp, regions, labels)
+    assert np.allclose(refitted.terms, (40.0, -15.0), atol=1.0)
+    assert 0 not in explained and len(explained) == len(regions) - 1
