@@ -56,8 +56,8 @@ from .lattice import FREQUENCIES, MIN_FREQUENCIES, block_any, block_coefficients
 from .luminance import MIN_SIDE, Luminance, luminance
 from .nfa import finite_log10, log10_binomial_tail, nfa_text
 from .regions import P_VOTE, W, Region, find_regions, log10_n_tests, min_region_pixels
-from .resampling import MIN_REGIONS, MIN_SPREAD_DEG, PERP_TOL, PROFILE_REL, PROFILE_TOL, RadialWarp, field_explained, \
-    radial_warp
+from .resampling import MIN_FIELD_SHARE, MIN_REGIONS, MIN_SPREAD_DEG, PERP_TOL, PROFILE_REL, PROFILE_TOL, RadialWarp, \
+    field_explained, radial_warp
 from .votes import grid_code, grid_origin, vote_map
 from .zeros import ZERO_THRESHOLD, flat_blocks, zero_counts
 
@@ -243,6 +243,10 @@ def _processing_text(processing: dict[str, Any] | None) -> str:
                 f"again: that compression's grid, at ({dx}, {dy}), leads the votes in {crop['cells_led']} of "
                 f"{crop['cells']} parts of the frame, not in one place; its {crop['n_regions']} regions are that "
                 f"history, not a pasted piece.")
+    saved = processing.get("saved_again")
+    if saved:
+        out += (f" The photo was {saved['done']}: {saved['evidence']}. That is processing, not a trace of a pasted "
+                f"piece.")
     warp = processing.get("radial")
     if warp:
         profile = warp["profile_px"]
@@ -305,11 +309,34 @@ def _summary(details: dict[str, Any]) -> str:
             f"is.{crop}")
 
 
+def _saved_again(lum: Luminance, significant: bool, details: dict[str, Any]) -> dict[str, Any] | None:
+    """A compression before the file's own, when the grid shows one: its kind, sentence and evidence."""
+    lattice = details.get("lattice") or {}
+    if lum.jpeg and lattice.get("applicable"):
+        return {"kind": "recompression",
+                "done": "saved again as JPEG after an earlier JPEG compression on the same block grid",
+                "evidence": (f"an earlier quantisation, coarser than the file's own, holds on "
+                             f"{lattice['n_frequencies']} low frequencies (median {100 * lattice['on_share']:.0f} % "
+                             f"of their coefficients on it)")}
+    if not lum.jpeg and significant:
+        return {"kind": "lossless storage after JPEG compression",
+                "done": "stored losslessly after a JPEG compression",
+                "evidence": (f"its pixels keep a JPEG block grid at {tuple(details['main_grid']['origin'])} "
+                             f"(NFA {nfa_text(details['main_grid']['log10_nfa'])})")}
+    return None
+
+
 def _processing(warp: RadialWarp | None, n_warped: int, earlier: EarlierGrid | None, n_cropped: int,
-                records: list[dict[str, Any]]) -> dict[str, Any] | None:
-    """The processing the regions show: what it is, the regions it explains and its evidence (None when none)."""
+                records: list[dict[str, Any]], saved: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The processing the grid shows: what it is, the regions it explains and its evidence (None when none).
+
+    A compression before the file's own (``saved``) is named only where no
+    crop or warp is, whose descriptions already start from a first compression.
+    """
     if warp is None and earlier is None:
-        return None
+        if saved is None:
+            return None
+        return {**Processing(saved["kind"], saved["done"]).to_details(), "saved_again": saved}
     done = []
     out: dict[str, Any] = {}
     if earlier is not None:
@@ -339,7 +366,10 @@ def _processing(warp: RadialWarp | None, n_warped: int, earlier: EarlierGrid | N
             "rule": (f"at least {MIN_REGIONS} regions in directions at least {MIN_SPREAD_DEG:g} degrees apart whose "
                      f"grids are the first grid shifted, modulo 8, along their own radius (within {PERP_TOL:g} px) "
                      f"by one radial profile D(r) = a (r / R)^3 + b (r / R), "
-                     f"R the half diagonal (within {PROFILE_TOL:g} px or {100 * PROFILE_REL:g} %)"),
+                     f"R the half diagonal (within {PROFILE_TOL:g} px or {100 * PROFILE_REL:g} %); once "
+                     f"established, the profile refitted on the regions' pixels, and a region also explained when "
+                     f"its grid is within 1 px of the shift the profile predicts at each pixel on at least "
+                     f"{100 * MIN_FIELD_SHARE:g} % of its pixels"),
         }
     kind = " and ".join(k for k, x in (("crop after compression", earlier), ("radial resampling", warp)) if x)
     return {**Processing(kind, "; and ".join(done)).to_details(), **out}
@@ -471,7 +501,8 @@ def analyse_luminance(lum: Luminance, params: Mapping[str, Any],
     details["regions"] = [_region_record(i + 1, stage, f[1], f[2](), cell, shape, log10_threshold, stage != f[0])
                           for i, (f, stage) in enumerate(zip(listed, stages))]
     details["n_meaningful"] = len(evidence)
-    details[PROCESSING_KEY] = _processing(warp, len(warped), earlier, len(cropped), details["regions"])
+    details[PROCESSING_KEY] = _processing(warp, len(warped), earlier, len(cropped), details["regions"],
+                                          _saved_again(lum, significant, details))
     _timed(marks, "report_data", t)
     details["elapsed_s"] = marks
     if not significant and not evidence and warp is None:

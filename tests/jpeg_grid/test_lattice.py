@@ -121,3 +121,15 @@ def test_coefficients_are_put_back_on_the_files_own_steps_where_rounding_cannot_
     snapped = on_file_steps(decoded, steps)
     assert np.array_equal(snapped[..., 1:, :], 3 * m[..., 1:, :])
     assert np.array_equal(snapped[..., 0, :2], decoded[..., 0, :2])  # steps 1 and 2: rounding may cross half a step
+
+
+def test_a_second_compression_and_a_lossless_copy_are_named_as_processing_a_single_one_is_not(tmp_path):
+    scene = _scene(3)
+    once = _analyse(tmp_path, "once.jpg", _saved(scene, "JPEG", quality=75))
+    twice = _analyse(tmp_path, "twice.jpg", _saved(_decoded(scene, 75), "JPEG", quality=95))
+    png = _analyse(tmp_path, "copy.png", _saved(_decoded(scene, 75), "PNG"))
+    assert once.details["processing"] is None
+    assert twice.details["processing"]["kind"] == "recompression"
+    assert "saved again as JPEG after an earlier JPEG compression" in twice.summary
+    assert png.details["processing"]["kind"] == "lossless storage after JPEG compression"
+    assert "processing, not a trace of a pasted piece" in png.summary
