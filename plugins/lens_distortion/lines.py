@@ -39,7 +39,7 @@ import numba as nb
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .edges import EdgePoints, pixel_neighbour_pairs
+from .edges import EdgePoints
 from .geometry import image_centre, norm_scale
 
 __all__ = ["DistortedLine", "extract_lines"]
@@ -115,6 +115,52 @@ def _inside_border(edges: EdgePoints, shape: tuple[int, int], border_px: float) 
     return (x >= border_px) & (y >= border_px) & (x <= w - 1 - border_px) & (y <= h - 1 - border_px)
 
 
+@nb.njit(cache=True)
+def _link_kernel(xy, normal, pixel, width, cos_max):
+    n = xy.shape[0]
+    rows = pixel[:, 0]
+    cols = pixel[:, 1]
+    first_row = rows[0] if n else 0
+    n_rows = (rows[-1] - first_row + 2) if n else 1
+    # Points of row r lie in row_start[r - first_row] : row_start[r - first_row + 1], by column.
+    row_start = np.searchsorted(rows, np.arange(first_row, first_row + n_rows))
+    ahead = np.full(n, -1, np.int64)
+    behind = np.full(n, -1, np.int64)
+    for i in range(n):
+        best_ahead = np.inf
+        best_behind = np.inf
+        nx, ny = normal[i, 0], normal[i, 1]
+        # Neighbour positions in row-major order: on equal distances the first wins.
+        for k in range(9):
+            dr, dc = k // 3 - 1, k % 3 - 1
+            c = cols[i] + dc
+            r = rows[i] + dr - first_row
+            if k == 4 or c < 0 or c >= width or r < 0 or r >= n_rows - 1:
+                continue
+            lo, hi = row_start[r], row_start[r + 1]
+            j = lo + np.searchsorted(cols[lo:hi], c)
+            if j >= hi or cols[j] != c:
+                continue
+            dx = xy[j, 0] - xy[i, 0]
+            dy = xy[j, 1] - xy[i, 1]
+            along = nx * dy - ny * dx
+            across = dx * nx + dy * ny
+            if normal[j, 0] * nx + normal[j, 1] * ny < cos_max or abs(along) <= abs(across):
+                continue
+            dist = np.hypot(dx, dy)
+            if along > 0 and dist < best_ahead:
+                best_ahead = dist
+                ahead[i] = j
+            elif along < 0 and dist < best_behind:
+                best_behind = dist
+                behind[i] = j
+    out = np.full(n, -1, np.int64)
+    for i in range(n):
+        if ahead[i] >= 0 and behind[ahead[i]] == i:
+            out[i] = ahead[i]
+    return out
+
+
 def _link(xy: np.ndarray, normal: np.ndarray, pixel: np.ndarray, width: int, max_link_deg: float) -> np.ndarray:
     """Successor of each edge point along its edge, or -1.
 
@@ -123,7 +169,10 @@ def _link(xy: np.ndarray, normal: np.ndarray, pixel: np.ndarray, width: int, max
     whose displacement is more along the tangent than across it. The forward
     tangent of point i is its normal turned by +90 degrees; the nearest
     candidate ahead and the nearest behind are chosen, and a link i -> j is
-    kept only if j's nearest candidate behind is i.
+    kept only if j's nearest candidate behind is i. Each point holds one
+    pixel, so a compiled loop over its 8 neighbours (found by bisection in
+    their row of the sorted pixels) does in one pass what arrays of
+    candidate pairs did in several.
 
     Parameters
     ----------
@@ -136,37 +185,8 @@ def _link(xy: np.ndarray, normal: np.ndarray, pixel: np.ndarray, width: int, max
     -------
     ndarray, shape (N,), int64
     """
-    n_pts = xy.shape[0]
-    i, j = pixel_neighbour_pairs(pixel[:, 0] * width + pixel[:, 1], width)
-    src, dst = np.concatenate((i, j)), np.concatenate((j, i))
-    d = xy[dst] - xy[src]
-    n_src = normal[src]
-    along = n_src[:, 0] * d[:, 1] - n_src[:, 1] * d[:, 0]
-    across = np.einsum("ij,ij->i", d, n_src)
-    ok = np.einsum("ij,ij->i", normal[dst], n_src) >= np.cos(np.deg2rad(max_link_deg))
-    ok &= np.abs(along) > np.abs(across)
-    dist = np.hypot(d[:, 0], d[:, 1])
-    # A point has at most one candidate per neighbour position: the nearest is a running minimum over the
-    # positions in order (the first position wins a tie), with no N x 9 table.
-    step = pixel[dst] - pixel[src]
-    slot = ((step[:, 0] + 1) * 3 + step[:, 1] + 1).astype(np.int8)
-    rows = np.arange(n_pts)
-    nearest = []
-    for side in (ok & (along > 0), ok & (along < 0)):
-        s_src, s_dst, s_dist, s_slot = src[side], dst[side], dist[side], slot[side]
-        by_slot = np.argsort(s_slot, kind="stable")
-        bounds = np.searchsorted(s_slot[by_slot], np.arange(10))
-        best = np.full(n_pts, np.inf)
-        target = np.full(n_pts, -1, dtype=np.int64)
-        for k in range(9):
-            sel = by_slot[bounds[k]: bounds[k + 1]]
-            better = s_dist[sel] < best[s_src[sel]]
-            best[s_src[sel][better]] = s_dist[sel][better]
-            target[s_src[sel][better]] = s_dst[sel][better]
-        nearest.append(target)
-    ahead, behind = nearest
-    mutual = (ahead >= 0) & (behind[np.maximum(ahead, 0)] == rows)
-    return np.where(mutual, ahead, -1)
+    return _link_kernel(np.ascontiguousarray(xy, np.float64), np.ascontiguousarray(normal, np.float64),
+                        np.ascontiguousarray(pixel, np.int64), int(width), float(np.cos(np.deg2rad(max_link_deg))))
 
 
 @nb.njit(cache=True)
