@@ -52,7 +52,7 @@ from forensics_core import PROCESSING_KEY, DetectorResult, Evidence, Processing,
 
 from .earlier_grid import CELLS, LEAD, MIN_CELL_SHARE, MIN_CELL_SHARE_ALL, EarlierGrid, earlier_grid
 from .lattice import FREQUENCIES, MIN_FREQUENCIES, block_any, block_coefficients, estimate_steps, missing_regions, \
-    off_lattice, on_file_steps
+    off_lattice
 from .luminance import MIN_SIDE, Luminance, luminance
 from .nfa import finite_log10, log10_binomial_tail, nfa_text
 from .regions import P_VOTE, W, Region, find_regions, log10_n_tests, min_region_pixels
@@ -191,10 +191,7 @@ def _lattice_stage(lum: Luminance, main: int, details: dict[str, Any], cell: int
     hw = coef.shape[:2]
     clipped = lum.clipped if lum.clipped is not None else np.zeros(y.shape, bool)
     usable = ~block_any(clipped, origin, hw)
-    # The lattice must hold on the values the file stores; a block is flagged off it only beyond what the
-    # decoder's rounding may move a value, since processing after the first compression (a tone curve) leaves
-    # an earlier lattice scaled a little, which rounding alone then spreads onto the neighbouring multiples.
-    lat = estimate_steps(coef if file_steps is None else on_file_steps(coef, file_steps), usable, file_steps)
+    lat = estimate_steps(coef, usable, file_steps)
     record.update({"steps": lat.steps.tolist(), "n_frequencies": lat.n_frequencies,
                    "on_share": round(float(np.median(lat.share[lat.steps > 0])), 3) if lat.n_frequencies else None,
                    "blocks": int(hw[0] * hw[1]), "clipped_blocks": int((~usable).sum())})
@@ -314,10 +311,10 @@ def _saved_again(lum: Luminance, significant: bool, details: dict[str, Any]) -> 
     lattice = details.get("lattice") or {}
     if lum.jpeg and lattice.get("applicable"):
         return {"kind": "recompression",
-                "done": "saved again as JPEG after an earlier JPEG compression on the same block grid",
-                "evidence": (f"an earlier quantisation, coarser than the file's own, holds on "
-                             f"{lattice['n_frequencies']} low frequencies (median {100 * lattice['on_share']:.0f} % "
-                             f"of their coefficients on it)")}
+                "done": "saved again as JPEG after an earlier JPEG compression",
+                "evidence": (f"on the file's own block grid, an earlier quantisation coarser than the file's holds "
+                             f"on {lattice['n_frequencies']} low frequencies (median "
+                             f"{100 * lattice['on_share']:.0f} % of their coefficients on it)")}
     if not lum.jpeg and significant:
         return {"kind": "lossless storage after JPEG compression",
                 "done": "stored losslessly after a JPEG compression",

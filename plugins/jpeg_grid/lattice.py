@@ -15,8 +15,7 @@ its re-compression at quality 99); read on the lattice itself, the test's
 null does not depend on the scene's texture, noise or the camera's quality:
 only rounding and clipping move an untouched block off its lattice.
 
-Steps. (1) The DCT of every block on the main grid (``block_coefficients``),
-for a JPEG put back on the file's own steps (``on_file_steps``) for step (2).
+Steps. (1) The DCT of every block on the main grid (``block_coefficients``).
 (2) Per low frequency, the step of an earlier lattice, if any: a step
 whose lattice holds at least 80 % of the coefficients, significantly more
 than the same histogram smoothed over one step would put near it
@@ -170,47 +169,6 @@ def block_coefficients(y: np.ndarray, origin: tuple[int, int]) -> np.ndarray:
     h, w = (y.shape[0] - dy) // 8, (y.shape[1] - dx) // 8
     b = np.asarray(y[dy: dy + 8 * h, dx: dx + 8 * w], dtype=np.float32).reshape(h, 8, w, 8).transpose(0, 2, 1, 3)
     return _D @ (b - np.float32(128.0)) @ _D.T
-
-
-def on_file_steps(coef: np.ndarray, file_steps: np.ndarray, sigma: float = ROUNDING_SIGMA) -> np.ndarray:
-    """The coefficients a JPEG file stores, ``q m``, from those of its decoded pixels on its own grid.
-
-    Decoding adds its rounding to every ``q m``. An earlier lattice is a
-    property of the integers ``m``, and measured on the decoded values that
-    rounding moves a multiple of ``q`` that is off the earlier lattice to
-    within its tolerance: for a candidate step of ``2 q`` the odd multiples
-    lie ``q`` from it, and at ``q = 3`` the tolerance ``q / 2 + 3 sigma`` is
-    2.85, so a decoded value of 2.8 counts as on; a file saved at quality 88
-    after a crop off the block grid showed a "lattice" of step 6 on three
-    frequencies that way (80.7 % of values "on", from 40 % even multiples).
-    Each value is therefore put back on its nearest multiple of ``q`` where
-    the rounding cannot cross half a step (``q / 2 > 3 sigma``, i.e. ``q >= 3``
-    for the default sigma); finer steps are left as decoded. This decides
-    whether a lattice holds (:func:`estimate_steps`); blocks are judged off
-    it on the decoded values (:func:`off_lattice`), whose tolerance also
-    covers an earlier lattice scaled a little by a tone curve applied after
-    the first compression (measured: levels and gamma saved at quality 91
-    and 93 had 6,944 and 550 blocks flagged on stored values, against 1,598
-    and 617 on decoded ones, and regions of NFA 10^-8 where a tone curve's
-    slope changed).
-
-    Parameters
-    ----------
-    coef : ndarray, shape (h, w, LOW, LOW)
-        From :func:`block_coefficients` on the file's own grid.
-    file_steps : ndarray, shape (8, 8)
-        The file's luminance steps, natural order.
-    sigma : float
-        Rounding noise per coefficient, DCT units.
-
-    Returns
-    -------
-    ndarray, shape (h, w, LOW, LOW), float32
-    """
-    q = np.asarray(file_steps, dtype=np.float32)[:LOW, :LOW]
-    snap = q / 2.0 > TOL_SIGMAS * sigma
-    safe = np.where(snap, q, np.float32(1.0))
-    return np.where(snap, safe * np.round(coef / safe), coef).astype(np.float32)
 
 
 def block_any(mask: np.ndarray, origin: tuple[int, int], shape: tuple[int, int]) -> np.ndarray:

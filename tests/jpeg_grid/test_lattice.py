@@ -110,19 +110,6 @@ def test_zero_own_missing_grid_test_stays_available(tmp_path):
     assert any(r["meaningful"] and r["stage"] == "missing" for r in result.details["regions"])
 
 
-def test_coefficients_are_put_back_on_the_files_own_steps_where_rounding_cannot_cross_half_a_step():
-    from forensics_plugins.jpeg_grid.lattice import LOW, on_file_steps
-
-    steps = np.full((8, 8), 3)
-    steps[0, 0], steps[0, 1] = 1, 2
-    rng = np.random.default_rng(0)
-    m = rng.integers(-20, 21, (5, 7, LOW, LOW)).astype(np.float32)
-    decoded = (steps[:LOW, :LOW] * m + rng.uniform(-0.6, 0.6, m.shape)).astype(np.float32)
-    snapped = on_file_steps(decoded, steps)
-    assert np.array_equal(snapped[..., 1:, :], 3 * m[..., 1:, :])
-    assert np.array_equal(snapped[..., 0, :2], decoded[..., 0, :2])  # steps 1 and 2: rounding may cross half a step
-
-
 def test_a_second_compression_and_a_lossless_copy_are_named_as_processing_a_single_one_is_not(tmp_path):
     scene = _scene(3)
     once = _analyse(tmp_path, "once.jpg", _saved(scene, "JPEG", quality=75))
