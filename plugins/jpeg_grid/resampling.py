@@ -297,7 +297,8 @@ def field_explained(warp: RadialWarp, regions: Sequence[Region], labels: np.ndar
     def explained_by(a: float, b: float) -> np.ndarray:
         off, _ = _field_offsets(px, a, b)
         hits = np.bincount(px.owner, weights=np.all(np.abs(off) < 1.0, axis=1), minlength=len(regions))
-        return hits >= MIN_FIELD_SHARE * np.bincount(px.owner, minlength=len(regions))
+        counts = np.bincount(px.owner, minlength=len(regions))
+        return (counts > 0) & (hits >= MIN_FIELD_SHARE * counts)
 
     a, b = warp.terms
     best = explained_by(a, b)
