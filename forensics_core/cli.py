@@ -554,8 +554,15 @@ def trust_add(cert):
     from . import trust as trust_store
     from .certificates import fingerprint, outside_validity
 
-    _change_trust("keys trust add", "trusted", lambda: trust_store.add(cert))
-    for c in trust_store.read_certificates(cert):
+    # Read once: the warnings are about the certificates trusted, even if the file changes meanwhile.
+    certs: list = []
+
+    def change():
+        certs.extend(trust_store.read_certificates(cert))
+        return [trust_store.trust_certificate(c) for c in certs]
+
+    _change_trust("keys trust add", "trusted", change)
+    for c in certs:
         problem = outside_validity(c)
         if problem:
             click.echo(f"warning: {fingerprint(c)} is {problem}; `verify` fails what it signed outside those dates",
