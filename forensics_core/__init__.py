@@ -7,6 +7,7 @@ from importlib.metadata import PackageNotFoundError, version
 
 from .contracts import PROCESSING_KEY, RADIAL_DISTORTION_KEY, Processing, RadialDistortion
 from .findings import (
+    HEADLINE_WORDS,
     DetectorFinding,
     DetectorResult,
     DetectorSpec,
@@ -63,6 +64,7 @@ __all__ = [
     "read_limited",
     "DetectorFinding",
     "DetectorResult",
+    "HEADLINE_WORDS",
     "DetectorSpec",
     "EmbeddedThumbnail",
     "Evidence",

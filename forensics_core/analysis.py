@@ -211,7 +211,8 @@ def _finding(job: _Job, outcome: tuple, printed: str | None, elapsed_s: float) -
     except MalformedResult as exc:
         return failed(f"malformed result: {exc}")
     return DetectorFinding(spec.name, spec.version, job.plugin, result.status, result.summary, result.score,
-                           result.p_value, result.nfa, result.details, job.params, elapsed, output=printed)
+                           result.p_value, result.nfa, result.details, job.params, elapsed, output=printed,
+                           headline=result.headline)
 
 
 def run_detector(

@@ -90,6 +90,7 @@ def evaluate(findings: Sequence[DetectorFinding], verdict: Verdict, info: Eviden
             "cross_validation": data.get("cross_validation"),
             "cllr_fused": calibration.fusion.cllr if calibration.fusion else None,
             "cllr_min_fused": calibration.fusion.cllr_min if calibration.fusion else None,
+            "elub_fused": [calibration.fusion.lower, calibration.fusion.upper] if calibration.fusion else None,
             "tool": dict(calibration.tool),
         },
         relevance=_relevance(calibration, info),

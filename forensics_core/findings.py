@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
-SCHEMA_VERSION = "1.4"
+SCHEMA_VERSION = "1.5"
 
 
 class Status(str, enum.Enum):
@@ -97,6 +97,10 @@ class DetectorSpec:
     supports_hd: bool = True
 
 
+HEADLINE_WORDS = 25
+"""The most words of a finding's headline (:attr:`DetectorResult.headline`)."""
+
+
 @dataclass
 class DetectorResult:
     """What a plugin's ``forensics_analyze`` returns for one photo.
@@ -118,6 +122,12 @@ class DetectorResult:
     details : dict
         Method-specific, JSON-serialisable numbers (numpy scalars and arrays are
         converted; NaN and infinities are refused: use ``None``).
+    headline : str or None
+        The finding in one sentence of at most :data:`HEADLINE_WORDS` words,
+        for the detector's row on the report's first page and the batch
+        index ("Regions at x 1380-1625 carry another JPEG grid (NFA
+        10^-6.7)."). Where it is missing or longer, the report shows the
+        summary's first sentence, cut to that length.
     """
 
     status: Status
@@ -126,6 +136,7 @@ class DetectorResult:
     p_value: float | None = None
     nfa: float | None = None
     details: dict[str, Any] = field(default_factory=dict)
+    headline: str | None = None
 
 
 @dataclass
@@ -151,6 +162,7 @@ class DetectorFinding:
     error: str | None = None
     log10_lr: float | None = None
     output: str | None = None
+    headline: str | None = None
 
 
 class Role(str, enum.Enum):
@@ -489,6 +501,8 @@ def check_result(result: Any) -> DetectorResult:
         raise MalformedResult(f"nfa {nfa} is negative")
     if not isinstance(result.details, Mapping):
         raise MalformedResult("details must be a mapping")
+    if result.headline is not None and not isinstance(result.headline, str):
+        raise MalformedResult("headline must be a sentence or None")
     return DetectorResult(
         status=status,
         summary=result.summary.strip(),
@@ -496,6 +510,7 @@ def check_result(result: Any) -> DetectorResult:
         p_value=p_value,
         nfa=nfa,
         details=to_jsonable(result.details),
+        headline=result.headline.strip() or None if result.headline is not None else None,
     )
 
 

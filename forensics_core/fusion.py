@@ -120,7 +120,7 @@ def bonferroni(findings: Sequence[DetectorFinding], alpha: float = ALPHA) -> Ver
         label, drivers = VerdictLabel.CONSISTENT, sorted(adjusted)
         text = (f"None of the {m} test(s) ({', '.join(sorted(adjusted))}) rejected the hypothesis of an original "
                 f"at the {alpha:g} level after Bonferroni adjustment (smallest adjusted p = {best:.3g}); "
-                "this is consistent with an original, not proof of one.")
+                "not rejecting it is no evidence that the photo is an original.")
     contributions = [Contribution(n, Role.DROVE if n in drivers else Role.COUNTED, p, adjusted[n]) for n, p in tests]
     return Verdict(label=label, score=1.0 - best, explanation=text + _idle_note(idle, findings), policy="bonferroni",
                    drivers=drivers, p_value=best, alpha=alpha, method=BONFERRONI_METHOD,
@@ -153,15 +153,15 @@ def fisher(findings: Sequence[DetectorFinding], alpha: float = ALPHA) -> Verdict
         drivers = sorted(n for n, _ in tests)
         label = VerdictLabel.CONSISTENT
         text = (f"Fisher's combination of the {m} test(s) ({', '.join(drivers)}) did not reject the hypothesis of an "
-                f"original at the {alpha:g} level (combined p = {combined:.3g}); this is consistent with an original, "
-                "not proof of one.")
+                f"original at the {alpha:g} level (combined p = {combined:.3g}); not rejecting it is no evidence "
+                "that the photo is an original.")
     contributions = [Contribution(n, Role.DROVE if n in drivers else Role.COUNTED, p, None) for n, p in tests]
     return Verdict(label=label, score=1.0 - combined, explanation=text + _idle_note(idle, findings), policy="fisher",
                    drivers=drivers, p_value=combined, alpha=alpha, method=FISHER_METHOD,
                    contributions=contributions + idle)
 
 
-LR_METHOD = (f"the fused likelihood ratio of the calibrated detectors: inconsistent with an original when it is at least "
+LR_METHOD = (f"the fused likelihood ratio of the calibrated detectors: labelled inconsistent when it is at least "
              f"{10 ** LR_DECISION_LOG10:g}, consistent when at most 1/{10 ** LR_DECISION_LOG10:g}, inconclusive in "
              f"between.")
 

@@ -103,8 +103,11 @@ def forensics_analyze(
     ``inconclusive`` with the reason in the summary, or ``skipped``), a
     one-sentence ``summary``, a ``score`` in [0, 1] (higher = more support for
     manipulation) or None, a ``p_value`` and/or ``nfa`` where the method
-    defines one, and JSON-serialisable ``details``. Raise on failure: the core
-    records the exception as this detector's error.
+    defines one, JSON-serialisable ``details``, and a ``headline`` of at most
+    25 words for your row on the report's first page and in a batch's
+    index ("Regions at x 1380-1625 carry another JPEG grid (NFA 10^-6.7).";
+    without one, the summary's first sentence is cut to 25 words). Raise on
+    failure: the core records the exception as this detector's error.
 
     The call runs in a child process with a time limit (``--timeout``), so it
     must not rely on state it changes in the parent; it must be deterministic
@@ -131,7 +134,13 @@ def forensics_report_section(finding: DetectorFinding, evidence: Evidence) -> Re
     may ignore findings of other detectors by returning None). Return a
     :class:`forensics_core.report.ReportSection`: a title, a Jinja2 template
     (autoescaped; never mark evidence-derived text safe), the context it
-    renders with, and figures (PNG or SVG bytes) it refers to by name.
+    renders with, figures (PNG or SVG bytes) it refers to by name, and
+    tables (:class:`forensics_core.report.Table`) too long for a page, each
+    written beside the report as ``<detector>-<key>.csv`` and listed in the
+    signed manifest (``{{ tables.key }}`` says where in one line). Keep the
+    section to about a page and at most two: what was measured on this
+    photo, the key figure (``{{ figures.key.beside(mm) }}`` or
+    ``.fit(mm)`` size it), a short table, method, limits and references.
     """
 
 
@@ -194,7 +203,9 @@ def forensics_localize(finding: DetectorFinding, shape: tuple[int, int]) -> np.n
     """Turn one of this plugin's findings into a map of the pixels it flags.
 
     Called by ``forensics validate`` to score localisation (MCC and IoU
-    against true masks), only on the plugin whose detector made ``finding``.
+    against true masks), and by the report for the outline it draws on page
+    1's photo when your finding drove the screen or its likelihood ratio
+    supports manipulation; only on the plugin whose detector made ``finding``.
     Return a boolean array of ``shape`` ``(H, W)`` (the stored grid), True
     where the finding places manipulated content (all False when it found
     none), or None when the detector does not localise or ``finding`` is not

@@ -16,11 +16,12 @@ from dataclasses import dataclass
 from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
+import numpy as np
 import pluggy
 
 from . import ENTRY_POINT_GROUP, hookspecs
 from .containment import PluginFault, can_fork, one_line, run_forked
-from .findings import DetectorSpec, PluginRecord
+from .findings import DetectorFinding, DetectorSpec, PluginRecord, Status
 
 ALLOW_ENV = "FORENSICS_PLUGINS"
 DENY_ENV = "FORENSICS_DISABLE_PLUGINS"
@@ -231,3 +232,21 @@ def _core_version() -> str:
     from . import __version__
 
     return __version__
+
+
+def localise_map(host: PluginHost, finding: DetectorFinding, shape: tuple[int, int]) -> np.ndarray | None:
+    """The boolean ``shape`` map of the pixels ``finding`` flags, from its plugin's ``forensics_localize``.
+
+    None when the plugin does not localise, fails, or answers with another shape.
+    """
+    impl = host.implementation("forensics_localize", finding.plugin)
+    if impl is None or finding.status is Status.ERROR:
+        return None
+    try:
+        pred = impl(finding=finding, shape=shape)
+    except Exception:
+        return None
+    if pred is None:
+        return None
+    pred = np.asarray(pred, dtype=bool)
+    return pred if pred.shape == tuple(shape) else None

@@ -1,6 +1,6 @@
 """Report building blocks shared by the core and the plugins."""
 
 from .images import display_image, figure_png
-from .sections import Figure, ReportSection
+from .sections import Figure, ReportSection, Table
 
-__all__ = ["Figure", "ReportSection", "display_image", "figure_png"]
+__all__ = ["Figure", "ReportSection", "Table", "display_image", "figure_png"]

@@ -101,6 +101,8 @@ def write_bundle(findings: Findings, evidence: Evidence, folder: Path, key: Exam
     for section in report.sections:
         for name, (data, _mime) in section.files.items():
             put(name, data)
+    for name, data in report.files.items():
+        put(name, data)
     if "html" in formats:
         put(HTML_NAME, report.html.encode("utf-8"))
     if "pdf" in formats:

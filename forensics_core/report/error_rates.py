@@ -15,21 +15,25 @@ from ..plugins import one_line
 from ..validation import INNOCENT_PROCESSING, LENS_SPLICES, SYNTHETIC
 from ..validation.cases import SET_CONDITION
 from ..validation.metrics import Rate
+from ..validation.null_check import VERDICT_RULE
 from ..validation.record import SHIPPED, SHIPPED_INNOCENT, SHIPPED_REAL, VERDICT, MethodMetrics, ValidationRecord, shipped_record
 
 
 @dataclass(frozen=True)
 class RateRow:
-    """One detector's (or the verdict's) measured figures, as text."""
+    """One detector's (or the verdict's) measured figures, as text: a short figure and its detail (counts, interval)."""
 
     name: str
     measured_version: str
     auc: str
+    auc_ci: str
     tpr_at_5: str
     tpr_at_1: str
     rule: str
     tpr: str
+    tpr_detail: str
     fpr: str
+    fpr_detail: str
     declined: str
     n: str
 
@@ -51,28 +55,53 @@ class RecordRates:
 
 
 @dataclass(frozen=True)
+class MethodRates:
+    """One method's figures across the records: the row of the section's one table (None where a record lacks it)."""
+
+    name: str
+    cells: list[RateRow | None]
+
+
+@dataclass(frozen=True)
 class ErrorRates:
     """What the section shows: real-photo figures first, then synthetic ones; ``missing`` says which record is absent."""
 
     records: list[RecordRates] = field(default_factory=list)
     missing: list[str] = field(default_factory=list)
 
+    @property
+    def methods(self) -> list[MethodRates]:
+        """One row per method in the order of the first record that has it, each with a cell per record."""
+        names: list[str] = []
+        for part in self.records:
+            names += [r.name for r in part.rows if r.name not in names]
+        return [MethodRates(n, [next((r for r in part.rows if r.name == n), None) for part in self.records])
+                for n in names]
 
-def _pct(r: Rate) -> str:
+    @property
+    def cautions(self) -> list[str]:
+        """The records' cautions, each once."""
+        return list(dict.fromkeys(c for part in self.records for c in part.cautions))
+
+
+def _pct(r: Rate) -> tuple[str, str]:
     if r.value is None:
-        return "—"
-    return f"{100 * r.value:.1f}% ({r.k}/{r.n}; 95% CI {100 * r.ci[0]:.1f}–{100 * r.ci[1]:.1f}%)"
+        return "—", ""
+    return f"{100 * r.value:.1f}%", f"{r.k}/{r.n}, {100 * r.ci[0]:.1f}–{100 * r.ci[1]:.1f}%"
 
 
 def _row(m: MethodMetrics, name: str) -> RateRow:
-    auc = "—" if m.auc is None else f"{m.auc:.3f}" + (f" ({m.auc_ci[0]:.3f}–{m.auc_ci[1]:.3f})" if m.auc_ci else "")
+    """``m`` as text; the verdict's rule in today's words, whatever words the record was written with."""
     t5, t1 = m.tpr_at_fpr.get("0.05"), m.tpr_at_fpr.get("0.01")
     declined = Rate(m.declined_spliced.k + m.declined_authentic.k, m.n_spliced + m.n_authentic, None, None)
     n = declined.n
+    tpr, tpr_detail = _pct(m.operating_point.tpr)
+    fpr, fpr_detail = _pct(m.operating_point.fpr)
     return RateRow(
-        name=name, measured_version=m.version, auc=auc,
+        name=name, measured_version=m.version, auc="—" if m.auc is None else f"{m.auc:.3f}",
+        auc_ci=f"{m.auc_ci[0]:.3f}–{m.auc_ci[1]:.3f}" if m.auc is not None and m.auc_ci else "",
         tpr_at_5="—" if t5 is None else f"{100 * t5:.0f}%", tpr_at_1="—" if t1 is None else f"{100 * t1:.0f}%",
-        rule=m.operating_point.rule, tpr=_pct(m.operating_point.tpr), fpr=_pct(m.operating_point.fpr),
+        rule=VERDICT_RULE if m.name == VERDICT else m.operating_point.rule, tpr=tpr, tpr_detail=tpr_detail, fpr=fpr, fpr_detail=fpr_detail,
         declined="—" if n == 0 else f"{100 * declined.k / n:.0f}%", n=f"{m.n_spliced} + {m.n_authentic}",
     )
 

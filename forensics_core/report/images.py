@@ -147,3 +147,51 @@ def thumbnail_jpeg(thumbnail: EmbeddedThumbnail | None) -> bytes | None:
     """
     img = None if thumbnail is None else thumbnail.image()
     return None if img is None else _jpeg(img)
+
+
+WHERE_COLOURS = ("#d55e00", "#0072b2", "#009e73", "#cc79a7", "#e69f00", "#56b4e9", "#f0e442", "#000000")
+"""Outline colours of the Where figure, one per detector in report order (Okabe & Ito's palette, which readers
+with the common colour-vision deficiencies tell apart); the stylesheet's ``swatch-N`` classes repeat them."""
+
+WHERE_SIDE = 900
+"""Longest side of the Where figure, pixels: sharp on page 1 at about 150 mm wide."""
+
+
+def where_figure(pixels: np.ndarray, masks: list[tuple[int, np.ndarray]], max_side: int = WHERE_SIDE) -> bytes:
+    """The photo, dimmed, with each detector's flagged pixels outlined in its colour, as JPEG.
+
+    Parameters
+    ----------
+    pixels : ndarray, shape (H, W) or (H, W, C)
+        The stored grid (``evidence.pixels``).
+    masks : list of (int, ndarray of bool, shape (H, W))
+        Each flagging detector's index into :data:`WHERE_COLOURS` and its map
+        (``forensics_localize``) at the stored size.
+    max_side : int
+        Longest side of the figure, pixels.
+
+    Returns
+    -------
+    bytes
+        A JPEG.
+
+    Notes
+    -----
+    A map is box-averaged down to the figure's size, so that a flagged area
+    smaller than one figure pixel still shows; its outline is the covered
+    pixels with an uncovered neighbour, thickened to 5 pixels, so that it
+    stays visible at print size.
+    """
+    from scipy import ndimage
+
+    img, _ = display_image(pixels, max_side, gain=0.75, offset=20)
+    rgb = np.asarray(img).copy()
+    for index, mask in masks:
+        cover = np.asarray(Image.fromarray(mask.astype(np.uint8) * 255).resize(img.size, Image.Resampling.BOX)) > 0
+        if not cover.any():
+            continue
+        edge = cover & ~ndimage.binary_erosion(cover, border_value=0)
+        edge = ndimage.binary_dilation(edge, iterations=2)
+        colour = WHERE_COLOURS[index % len(WHERE_COLOURS)]
+        rgb[edge] = [int(colour[i:i + 2], 16) for i in (1, 3, 5)]
+    return _jpeg(Image.fromarray(rgb))

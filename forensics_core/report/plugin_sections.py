@@ -2,33 +2,40 @@
 
 Each plugin's ``forensics_report_section`` is called on its own, in a forked
 child as detectors are, and what it returns is rendered there: its figures
-decoded and reduced for the page, its template filled in a sandboxed,
-autoescaping Jinja2 environment (a template cannot reach Python internals,
-and every value from ``context`` is escaped unless the plugin's own template
-text put the markup there). A plugin whose hook raises, returns something
+decoded and reduced for the page, its tables turned into CSV files, its
+template filled in a sandboxed, autoescaping Jinja2 environment (a template
+cannot reach Python internals, and every value from ``context`` is escaped
+unless the plugin's own template text put the markup there). A plugin whose hook raises, returns something
 other than a :class:`ReportSection`, or whose template fails, gets a section
 that says so, followed by its finding in generic form; the report still renders.
 """
 
 from __future__ import annotations
 
+import io
+import numbers
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import partial
+from typing import Any
 
+import numpy as np
 from jinja2 import StrictUndefined
 from jinja2.sandbox import ImmutableSandboxedEnvironment
 from markupsafe import Markup
+from PIL import Image
 
 from ..containment import Child, PluginFault, can_fork, jobs_for, wait_any
 from ..evidence import Evidence
 from ..findings import DetectorFinding
 from ..plugins import PluginHost, one_line
 from . import images
-from .sections import Figure, ReportSection
+from .sections import Figure, ReportSection, Table
+from .tables import csv_bytes
 
 _SAFE_NAME = re.compile(r"[^A-Za-z0-9_.-]+")
+_CLASS_UNSAFE = re.compile(r"[^A-Za-z0-9_-]+")
 
 
 @dataclass
@@ -36,7 +43,10 @@ class RenderedFigure:
     """A figure as a template sees it: ``{{ figures.key }}`` renders it inline.
 
     ``src`` (a ``data:`` URL) and ``caption`` are there for templates that lay
-    out the image themselves.
+    out the image themselves. A placed figure (:meth:`fit`, :meth:`beside`)
+    gets a class of its own and its sizes as stylesheet ``rules``: the
+    report's Content-Security-Policy admits its one hashed stylesheet and no
+    ``style`` attribute.
     """
 
     key: str
@@ -44,6 +54,8 @@ class RenderedFigure:
     caption: str
     file_name: str
     used: bool = False
+    aspect: float | None = None
+    rules: list[str] = field(default_factory=list)
 
     @property
     def src(self) -> str:
@@ -51,9 +63,62 @@ class RenderedFigure:
         return self.data_url
 
     def __html__(self) -> str:
+        return self._figure("", "")
+
+    def fit(self, height_mm: float) -> Markup:
+        """The figure as ``{{ figures.key }}`` renders it, its image at most ``height_mm`` millimetres high.
+
+        For a figure of the whole photo, which at the page's width would
+        take a page of its own when the photo is portrait.
+        """
+        return self._figure("", f"max-height: {float(height_mm):g}mm; width: auto")
+
+    def beside(self, height_mm: float) -> Markup:
+        """The figure at the right of the text that follows it, ``height_mm`` millimetres high at most.
+
+        At most half the page wide, so that the text beside it stays
+        readable; tables after it start below it.
+        """
+        height = float(height_mm)
+        # clear: a figure placed beside another would leave the text a sliver of the page between them.
+        placed = "float: right; clear: right; margin: 0 0 2mm 4mm; "
+        if self.aspect is None:
+            return self._figure(placed + "width: 45%", f"max-height: {height:g}mm; width: auto")
+        return self._figure(placed + f"width: {height * self.aspect:.1f}mm; max-width: 50%",
+                            "width: 100%; height: auto")
+
+    @property
+    def css_class(self) -> str:
+        return "fig-" + _CLASS_UNSAFE.sub("_", self.file_name)
+
+    def _figure(self, figure_style: str, img_style: str) -> Markup:
         caption = Markup("<figcaption>{}</figcaption>").format(self.caption) if self.caption else ""
-        return Markup('<figure class="plugin-figure"><img src="{}" alt="{}">{}</figure>').format(
-            self.src, self.caption or self.key, caption)
+        placed = figure_style or img_style
+        if figure_style:
+            self.rules.append(f"figure.{self.css_class} {{ {figure_style} }}")
+        if img_style:
+            self.rules.append(f"figure.{self.css_class} img {{ {img_style} }}")
+        classes = f"plugin-figure {self.css_class}" if placed else "plugin-figure"
+        return Markup('<figure class="{}"><img src="{}" alt="{}">{}</figure>').format(
+            classes, self.src, self.caption or self.key, caption)
+
+
+@dataclass
+class RenderedTable:
+    """A table as a template sees it: the CSV file beside the report that holds it.
+
+    ``{{ tables.key }}`` renders the one-line note that says where the rows are.
+    """
+
+    key: str
+    file_name: str
+    caption: str
+    n_rows: int
+
+    def __html__(self) -> str:
+        rows = Markup("{} rows").format(self.n_rows)
+        what = Markup("{} ({})").format(self.caption, rows) if self.caption else rows
+        return Markup('<p class="note">{}: in {}, beside this report.</p>').format(what, self.file_name)
 
 
 @dataclass
@@ -70,8 +135,11 @@ class DetectorSection:
         Why the plugin's section could not be used, in one line.
     figures : list of RenderedFigure
         All figures; those the template did not place are shown after it.
+    tables : list of RenderedTable
+        The section's tables, each a CSV file beside the report.
     files : dict of str to (bytes, str)
-        Full-resolution figure files to write beside the report: name to (data, mime).
+        Files to write beside the report (full-resolution figures, the
+        tables' CSV): name to (data, mime).
     """
 
     finding: DetectorFinding
@@ -79,7 +147,13 @@ class DetectorSection:
     body: Markup | None = None
     failure: str | None = None
     figures: list[RenderedFigure] = field(default_factory=list)
+    tables: list[RenderedTable] = field(default_factory=list)
     files: dict[str, tuple[bytes, str]] = field(default_factory=dict)
+
+    @property
+    def css(self) -> str:
+        """The stylesheet rules that size and place this section's figures (made by the core from numbers)."""
+        return "\n".join(rule for f in self.figures for rule in f.rules)
 
     @property
     def unplaced_figures(self) -> list[RenderedFigure]:
@@ -96,15 +170,63 @@ class _Sandbox(ImmutableSandboxedEnvironment):
 _EXTENSIONS = {"image/png": "png", "image/jpeg": "jpg", "image/svg+xml": "svg"}
 
 
+def _file_name(finding: DetectorFinding, key: object, extension: str) -> str:
+    return f"{_SAFE_NAME.sub('_', finding.name)}-{_SAFE_NAME.sub('_', str(key))}.{extension}"
+
+
 def _figures(finding: DetectorFinding, figs: dict[str, Figure]) -> tuple[list[RenderedFigure], dict[str, tuple[bytes, str]]]:
     rendered, files = [], {}
     for key, fig in figs.items():
         if not isinstance(fig, Figure):
             raise TypeError(f"figure {key!r} is a {type(fig).__name__}, not a Figure")
         data, mime = images.for_report(fig)
-        name = f"{_SAFE_NAME.sub('_', finding.name)}-{_SAFE_NAME.sub('_', str(key))}.{_EXTENSIONS[fig.mime]}"
+        name = _file_name(finding, key, _EXTENSIONS[fig.mime])
         files[name] = (fig.data, fig.mime)
-        rendered.append(RenderedFigure(str(key), images.data_url(data, mime), str(fig.caption), name))
+        rendered.append(RenderedFigure(str(key), images.data_url(data, mime), str(fig.caption), name,
+                                       aspect=_aspect(data, mime)))
+    return rendered, files
+
+
+_SVG_SIZE = re.compile(rb"<svg\b[^>]*?\swidth=\"([\d.]+)(?:pt|px)?\"[^>]*?\sheight=\"([\d.]+)(?:pt|px)?\"")
+
+
+def _aspect(data: bytes, mime: str) -> float | None:
+    """Width over height of an embedded figure, or None when its header does not say."""
+    if mime == "image/svg+xml":
+        m = _SVG_SIZE.search(data[:4096])
+        width, height = (float(m.group(1)), float(m.group(2))) if m else (0.0, 0.0)
+    else:
+        with Image.open(io.BytesIO(data), formats=["PNG", "JPEG"]) as img:
+            width, height = img.size
+    return width / height if width > 0 and height > 0 else None
+
+
+def _plain(value: object) -> Any:
+    """A cell as a plain Python value: a numpy scalar would otherwise be written as its repr."""
+    if value is None or isinstance(value, (str, bool)):
+        return value
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, numbers.Integral):
+        return int(value)
+    if isinstance(value, numbers.Real):
+        return float(value)
+    raise TypeError(f"a table cell is a {type(value).__name__}, not a plain value")
+
+
+def _tables(finding: DetectorFinding,
+            tables: dict[str, Table]) -> tuple[list[RenderedTable], dict[str, tuple[bytes, str]]]:
+    rendered, files = [], {}
+    for key, table in tables.items():
+        if not isinstance(table, Table):
+            raise TypeError(f"table {key!r} is a {type(table).__name__}, not a Table")
+        columns = [str(c) for c in table.columns]
+        rows = [[_plain(v) for v in row] for row in table.rows]
+        if any(len(row) != len(columns) for row in rows):
+            raise ValueError(f"table {key!r} has rows whose length is not its {len(columns)} columns")
+        name = _file_name(finding, key, "csv")
+        files[name] = (csv_bytes(columns, rows), "text/csv")
+        rendered.append(RenderedTable(str(key), name, str(table.caption), len(rows)))
     return rendered, files
 
 
@@ -112,9 +234,12 @@ def _render(finding: DetectorFinding, section: object) -> DetectorSection:
     if not isinstance(section, ReportSection):
         raise TypeError(f"returned a {type(section).__name__}, not a ReportSection")
     figures, files = _figures(finding, dict(section.figures))
+    tables, table_files = _tables(finding, dict(section.tables))
     template = _Sandbox().from_string(str(section.template))
-    body = Markup(template.render(**dict(section.context), figures={f.key: f for f in figures}, finding=finding))
-    return DetectorSection(finding, str(section.title), body=body, figures=figures, files=files)
+    body = Markup(template.render(**dict(section.context), figures={f.key: f for f in figures},
+                                  tables={t.key: t for t in tables}, finding=finding))
+    return DetectorSection(finding, str(section.title), body=body, figures=figures, tables=tables,
+                           files={**files, **table_files})
 
 
 def _failed(finding: DetectorFinding, reason: str) -> DetectorSection:

@@ -30,14 +30,17 @@ from ..defaults import PAPER_SIZES
 from ..evidence import Evidence
 from ..findings import ExifSummary, Findings, Verdict
 from ..fusion import LR_POLICY
-from ..plugins import PluginHost
+from ..plugins import PluginHost, localise_map
 from ..text import visible
 from ..validation.record import ValidationRecord
 from . import images, wording
 from .error_rates import ErrorRates, given_error_rates, shipped_error_rates
+from .tables import csv_bytes
 from .plugin_sections import DetectorSection, sections_for
 
 TEMPLATES_PACKAGE = "forensics_core.templates"
+METADATA_CSV = "metadata.csv"
+"""Every metadata tag, written beside the report: pages of tags help no reader of the PDF."""
 NOT_GIVEN = "not given"
 _DETAILS_LIMIT = 3000
 
@@ -96,10 +99,12 @@ class ReportOptions:
 
 @dataclass
 class RenderedReport:
-    """The report's HTML, its detector sections (with the figure files to write) and what the PDF renderer refused."""
+    """The report's HTML, its detector sections (with the figure files to write), the core's own files to write
+    beside it (name to bytes: the tables too long for the page), and what the PDF renderer refused."""
 
     html: str
     sections: list[DetectorSection]
+    files: dict[str, bytes] = field(default_factory=dict)
     refused_urls: list[str] = field(default_factory=list)
 
 
@@ -228,6 +233,28 @@ def _shell_quote(text: str) -> str:
     return "$'" + visible(text.replace("\\", "\\\\").replace("'", "\\'")) + "'"
 
 
+def _where(findings: Findings, evidence: Evidence, host: PluginHost | None) -> dict[str, Any]:
+    """Page 1's picture: the photo with the flagged pixels of every detector that found something outlined.
+
+    The maps come from each plugin's ``forensics_localize``, the same maps
+    ``forensics validate`` scores against true masks, for the detectors
+    :func:`.wording.found_something` names; a detector colours its outline
+    by its row's position, so that page 1's table is the legend.
+    """
+    shape = tuple(evidence.pixels.shape[:2])
+    masks, flagged = [], []
+    for index, finding in enumerate(findings.detectors):
+        if host is None or not wording.found_something(finding, findings.verdict):
+            continue
+        mask = localise_map(host, finding, shape)
+        if mask is not None and mask.any():
+            masks.append((index, mask))
+            flagged.append(finding.name)
+    data = images.where_figure(evidence.pixels, masks)
+    return {"src": images.data_url(data, "image/jpeg"), "flagged": flagged,
+            "colours": {findings.detectors[i].name: i % len(images.WHERE_COLOURS) for i, _ in masks}}
+
+
 def _summary(findings: Findings) -> dict[str, Any]:
     verdict = findings.verdict
     strength = wording.strength(verdict)
@@ -243,34 +270,29 @@ def _summary(findings: Findings) -> dict[str, Any]:
     rows = [
         {"name": f.name, "version": f.version, "status": f.status.value, "status_words": wording.STATUS_WORDS[f.status],
          "score": _num(f.score), "p_value": _num(f.p_value), "nfa": _num(f.nfa), "summary": f.summary, "error": f.error,
-         "lr": "—" if f.log10_lr is None else f"{10.0 ** f.log10_lr:.3g}",
-         **role(f.name)}
+         "lr": "—" if f.log10_lr is None else wording.lr_text(f.log10_lr),
+         "sentence": wording.row_sentence(f), **role(f.name)}
         for f in findings.detectors
     ]
     reading = {
-        "consistent": "No detector found a trace of manipulation strong enough to reject the hypothesis that the photo is "
-                      "an original. This does not prove that it is one: the detectors look for specific traces only.",
+        "consistent": "No detector's test rejected its null hypothesis at the stated level. That is no evidence that "
+                      "the photo is an original: the detectors look for specific traces only.",
         "inconsistent": "At least one detector found a trace that is unlikely in an original photo at the stated level. "
-                        "It does not say who altered the photo, how, or why.",
-        "inconclusive": "The detectors could not test the photo (too little of their trace, or failures); nothing is "
-                        "said for or against an original.",
+                        "A rejection says how unusual the trace is among originals, not how strongly it supports "
+                        "manipulation (the statement above does), nor who altered the photo, how, or why.",
+        "inconclusive": "The detectors could not test the photo (too little of their trace, or failures); the screen "
+                        "says nothing for or against manipulation.",
     }[verdict.label.value]
     if verdict.policy == LR_POLICY:
-        reading = {
-            "consistent": "The findings are far more probable if the photo is as the camera produced it than if content "
-                          "was inserted, moved or removed; this weighs the detectors' traces only.",
-            "inconsistent": "The findings are far more probable if content was inserted, moved or removed than if the "
-                            "photo is as the camera produced it. They do not say who altered the photo, how, or why.",
-            "inconclusive": "The findings do not favour either proposition strongly enough to pass the stated thresholds; "
-                            "nothing is said for or against an original.",
-        }[verdict.label.value]
+        reading = ("Under this policy the screen is the fused likelihood ratio compared with thresholds fixed in "
+                   "advance; the statement above gives its value.")
     lr_summary = _lr_summary(verdict, findings.detectors)
     processing = [{"detector": f.name, "kind": p.kind, "description": p.description}
                   for f in findings.detectors if (p := Processing.from_finding(f)) is not None]
     return {
+        "statement": wording.statement(verdict),
+        "screening": wording.screening(verdict),
         "processing": processing,
-        "label": verdict.label.value,
-        "outcome": wording.OUTCOME_WORDS[verdict.label],
         "tension": _tension(verdict, lr_summary, rows),
         "strength": strength,
         "explanation": verdict.explanation,
@@ -286,13 +308,13 @@ def _summary(findings: Findings) -> dict[str, Any]:
 
 
 def _tension(verdict: Verdict, lr_summary: dict[str, Any] | None, rows: Sequence[dict[str, Any]]) -> str | None:
-    """What page 1 says when the triage's outcome and the likelihood ratio point different ways, else None.
+    """What the report says when the screen and the likelihood ratio point different ways, else None.
 
-    The triage rule tests each detector's trace against a level fixed in
-    advance and leaves out detectors that state no p-value; the likelihood
-    ratio weighs every calibrated detector. A green "consistent with an
-    original" above support for Hp (or a red "inconsistent" above support for
-    Hd) would otherwise read as one answer when there are two.
+    The screen tests each detector's trace against a level fixed in advance
+    and leaves out detectors that state no p-value; the likelihood ratio
+    weighs every calibrated detector. A screen that rejected nothing beside
+    support for Hp (or a rejection beside support for Hd) would otherwise
+    read as one answer when there are two.
     """
     lr = verdict.likelihood_ratio
     if verdict.policy == LR_POLICY or lr is None or lr.log10_lr is None or lr_summary is None:
@@ -302,17 +324,16 @@ def _tension(verdict: Verdict, lr_summary: dict[str, Any] | None, rows: Sequence
     if verdict.label.value == "consistent" and side > 0:
         untested = ", ".join(r["name"] for r in rows if r["role"] == "advisory")
         left_out = f" ({untested} state none and are left out of it)" if untested else ""
-        return (f"The outcome and the strength point different ways. No detector's test rejected an original at the "
-                f"stated level, yet the calibrated likelihood ratio gives {lr.verbal}. The triage counts only "
+        return (f"The screen and the statement point different ways. No detector's test rejected an original at the "
+                f"stated level, yet the calibrated likelihood ratio gives {lr.verbal}. The screen counts only "
                 f"detectors that state a p-value{left_out}; the likelihood ratio weighs every calibrated detector. "
-                f"The outcome is therefore no sign that the photo is an original: read the sections of the detectors "
-                f"that carry the likelihood ratio ({carriers}).")
+                f"Read the sections of the detectors that carry the likelihood ratio ({carriers}).")
     if verdict.label.value == "inconsistent" and side < 0:
-        return (f"The outcome and the strength point different ways. A detector's test rejected an original at the "
+        return (f"The screen and the statement point different ways. A detector's test rejected an original at the "
                 f"stated level, yet the calibrated likelihood ratio gives {lr.verbal}. A rejection says how "
                 f"unusual the trace is among originals, not how much more probable it is after manipulation; on the "
                 f"calibration data, findings like these were more probable in originals. Read the section of the "
-                f"detector that drove the outcome before relying on it.")
+                f"detector that drove the screen before relying on it.")
     return None
 
 
@@ -383,12 +404,12 @@ def render_html(findings: Findings, evidence: Evidence, signature: SignatureInfo
     sections : sequence of DetectorSection, optional
         Already built sections (otherwise built here).
     """
-    css = _stylesheet(options.paper)
     # A plugin's section is held to the run's --timeout, as its analysis was.
     timeout = findings.parameters.get("timeout_s")
     built = (list(sections) if sections is not None
              else sections_for(host, findings.detectors, evidence, jobs=options.jobs,
                                timeout_s=float(timeout) if isinstance(timeout, (int, float)) and timeout > 0 else None))
+    css = "\n".join([_stylesheet(options.paper)] + [s.css for s in built if s.css])
     thumbnail = images.thumbnail_jpeg(evidence.thumbnail)
     ev = findings.evidence
     context = {
@@ -409,6 +430,7 @@ def render_html(findings: Findings, evidence: Evidence, signature: SignatureInfo
         "thumbnail_note": (f"The EXIF data names a thumbnail, but it could not be read: {evidence.thumbnail.error}."
                            if evidence.thumbnail is not None else "The file carries no embedded thumbnail."),
         "summary": _summary(findings),
+        "where": _where(findings, evidence, host),
         "sections": built,
         "status_words": wording.STATUS_WORDS,
         "parameters": findings.parameters,
@@ -420,11 +442,19 @@ def render_html(findings: Findings, evidence: Evidence, signature: SignatureInfo
         "signature": signature,
         "raw_tags": ev.exif.raw,
         "metadata_groups": _metadata_groups(ev.metadata),
+        "metadata_file": METADATA_CSV,
         "extra_metadata": ev.extra_metadata,
         "error_rates": _error_rates(findings, options),
     }
     html = _environment().get_template("report.html.j2").render(context)
-    return RenderedReport(html=html, sections=built)
+    return RenderedReport(html=html, sections=built, files={METADATA_CSV: _metadata_csv(ev)})
+
+
+def _metadata_csv(ev) -> bytes:
+    """Every metadata tag of the evidence as a table: ExifTool's by group, else the raw EXIF tags."""
+    if ev.metadata:
+        return csv_bytes(["group", "tag", "value"], [[t.group, t.name, t.value] for t in ev.metadata])
+    return csv_bytes(["ifd", "tag", "name", "value"], [[t.ifd, f"0x{t.tag:04x}", t.name, t.value] for t in ev.exif.raw])
 
 
 def _metadata_groups(tags) -> list[tuple[str, list]]:

@@ -38,6 +38,9 @@ NULL_LEVELS = (0.01, 0.001)
 VERDICT = "verdict"
 """Name under which the fused verdict's figures are recorded, beside the detectors'."""
 
+VERDICT_RULE = "the screen rejected (fusion label inconsistent)"
+"""The fused verdict's operating point: the fusion policy's screen rejected the photo's null."""
+
 _NO_SET = "(no set)"
 
 
@@ -224,7 +227,7 @@ def null_check(cases: Sequence[Mapping[str, Any]], name: str, fusion: Mapping[st
     obs = _observations(taken, name, fusion)
     aut = [o for o in obs if not o.spliced]
     p = np.array([o.p for o in aut if o.p is not None], dtype=float)
-    rule = "verdict inconsistent with an original" if name == VERDICT else detector_rule(fusion)
+    rule = VERDICT_RULE if name == VERDICT else detector_rule(fusion)
     return NullCheck(
         name=name, rule=rule, n_authentic=len(aut), n_tested=len(p),
         smallest_p=float(p.min()) if len(p) else None,

@@ -20,7 +20,7 @@ import numpy as np
 from ..findings import Status, VerdictLabel
 from .metrics import FPR_TARGETS, Rate, auc_bootstrap_ci, rate, roc_auc, roc_curve, suspicion, tpr_at_fpr
 from .dependence import PairDependence
-from .null_check import VERDICT, NullCheck
+from .null_check import VERDICT, VERDICT_RULE, NullCheck
 from .runner import CaseResult
 
 FORMAT = "forensics-validation/1"
@@ -316,7 +316,7 @@ def compute_methods(
              r.verdict is not VerdictLabel.INCONCLUSIVE, r.verdict is VerdictLabel.INCONSISTENT, False)
         for r in taken
     ]
-    methods.append(_method_metrics(VERDICT, "", verdict_rows, "verdict inconsistent with an original"))
+    methods.append(_method_metrics(VERDICT, "", verdict_rows, VERDICT_RULE))
     return methods
 
 

@@ -17,7 +17,7 @@ from ..evidence import EvidenceError, load_evidence
 from ..findings import DetectorFinding, Findings, Status, VerdictLabel
 from ..fusion import finding_p
 from ..atomic import write_atomic
-from ..plugins import PluginHost, one_line
+from ..plugins import PluginHost, localise_map, one_line
 from .cases import Case, load_mask
 from .metrics import iou, mcc
 
@@ -55,24 +55,6 @@ class CaseResult:
 # inherits the caller's host (entry points or, in tests, fixture plugins)
 # without loading or pickling it again.
 _HOST: PluginHost | None = None
-
-
-def localise_map(host: PluginHost, finding: DetectorFinding, shape: tuple[int, int]) -> np.ndarray | None:
-    """The boolean ``shape`` map of the pixels ``finding`` flags, from its plugin's ``forensics_localize``.
-
-    None when the plugin does not localise, fails, or answers with another shape.
-    """
-    impl = host.implementation("forensics_localize", finding.plugin)
-    if impl is None or finding.status is Status.ERROR:
-        return None
-    try:
-        pred = impl(finding=finding, shape=shape)
-    except Exception:
-        return None
-    if pred is None:
-        return None
-    pred = np.asarray(pred, dtype=bool)
-    return pred if pred.shape == tuple(shape) else None
 
 
 def _localise(host: PluginHost, finding: DetectorFinding, truth: np.ndarray) -> tuple[float, float] | None:

@@ -10,11 +10,10 @@ import numpy as np
 from PIL import Image
 
 from ..findings import DetectorFinding, Findings
-from ..plugins import PluginHost
+from ..plugins import PluginHost, localise_map
 from .cases import Case
 from .null_check import VERDICT, convictions
 from .record import ValidationRecord
-from .runner import localise_map
 
 THUMB_SIDE = 192
 """Longest side of a thumbnail, pixels."""

@@ -39,9 +39,11 @@ class _Timer:
         self._t = now
 
 
-def _inconclusive(reason: str, details: dict[str, Any]) -> DetectorResult:
+def _inconclusive(reason: str, details: dict[str, Any], headline: str | None = None) -> DetectorResult:
+    """An inconclusive result; ``headline`` when the reason is too long for page 1."""
     details["reason"] = reason
-    return DetectorResult(Status.INCONCLUSIVE, f"Inconclusive: {reason}.", details=details)
+    return DetectorResult(Status.INCONCLUSIVE, f"Inconclusive: {reason}.", details=details,
+                          headline=headline or f"Inconclusive: {reason}.")
 
 
 def _colour_grid(pixels: np.ndarray) -> tuple[np.ndarray | None, float, str | None]:
@@ -163,7 +165,8 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
         votes = phase_votes(feats.features, feats.colour, usable, float(params["shrinkage"]),
                             float(params["colour_ridge"]))
     except ValueError as exc:
-        return _inconclusive(f"the signature of the mosaic cannot be learnt: {exc}", details)
+        return _inconclusive(f"the signature of the mosaic cannot be learnt: {exc}", details,
+                             "Inconclusive: the signature of the photo's mosaic cannot be learnt.")
     timer.lap("votes")
     diag_voting = usable & (votes.t_diag != 0)
     rb_voting = usable & (votes.t_diag > 0) & (votes.t_rb != 0)
@@ -186,7 +189,10 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
         details["elapsed_s"] = timer.marks
         return _inconclusive("no demosaicing trace: the blocks do not agree on a mosaic phase better than chance "
                              f"({diag['agree']} of {diag['votes']} votes, p = {10 ** diag['log10_p']:.2g}); strong "
-                             "compression, resizing or a non-Bayer camera erase it", details)
+                             "compression, resizing or a non-Bayer camera erase it", details,
+                             f"Inconclusive: no demosaicing trace; blocks' agreement on one mosaic phase, "
+                             f"{diag['agree']} of {diag['votes']}, is not significant "
+                             f"(p = {10 ** diag['log10_p']:.2g}).")
 
     name = naming.name_pattern(rgb, votes, block, full)
     timer.lap("naming")
@@ -236,7 +242,9 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
                  "cannot be told from another mosaic") if regions else ""
         return _inconclusive(f"the demosaicing trace is too weak to localise a pasted region smaller than {limit} "
                              f"(blocks agree with the photo's phase at a rate of {host['rate'] or 0:.2f}){aside}",
-                             details)
+                             details,
+                             f"Inconclusive: the demosaicing trace (agreement {host['rate'] or 0:.2f}) is too weak "
+                             f"to localise a paste smaller than {limit}.")
     nfa = regions[0]["nfa"] if regions else float(10.0 ** result.min_log10_nfa)
     return DetectorResult(
         status=Status.OK,
@@ -244,12 +252,25 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
         score=1.0 - min(1.0, nfa),
         nfa=nfa,
         details=details,
+        headline=_headline(details, regions, nfa),
     )
 
 
 def _nfa_text(log10_nfa: float) -> str:
     """An NFA for a sentence; powers of ten below what a float holds."""
     return f"{10 ** log10_nfa:.2g}" if log10_nfa > -300 else f"10^{log10_nfa:.0f}"
+
+
+def _headline(details: dict[str, Any], regions: list[dict[str, Any]], nfa: float) -> str:
+    """The finding in one sentence for page 1: where a region departs, or the phase held throughout."""
+    if not regions:
+        return (f"One demosaicing phase throughout (blocks agree at {details['diagonal']['rate']:.2f}); no region "
+                f"departs (smallest NFA {nfa:.2g}).")
+    r = regions[0]
+    x0, y0, x1, y1 = r["bbox_px"]
+    more = f", with {len(regions) - 1} more region(s)," if len(regions) > 1 else ""
+    return (f"Region at x {x0}–{x1}, y {y0}–{y1} ({100 * r['area_fraction']:.1f}% of the photo){more} has another "
+            f"demosaicing phase (NFA {_nfa_text(r['log10_nfa'])}).")
 
 
 def _summary(details: dict[str, Any], regions: list[dict[str, Any]], nfa: float) -> str:

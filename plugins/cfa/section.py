@@ -6,12 +6,15 @@ from importlib.resources import files
 from typing import Any
 
 from forensics_core import DetectorFinding, Evidence, Status
-from forensics_core.report import Figure, ReportSection
+from forensics_core.report import Figure, ReportSection, Table
 
 from .spec import REFERENCES
 from .figures import map_png
 
 _KIND_WORDS = {"diagonal": "green on the other diagonal", "red_blue": "red and blue swapped"}
+
+SHOWN_REGIONS = 5
+"""Regions listed on the page; all of them are in the CSV file."""
 
 
 def _p_text(log10_p: float | None) -> str:
@@ -43,8 +46,31 @@ def _region_rows(regions: list[dict[str, Any]]) -> list[dict[str, Any]]:
     } for r in regions]
 
 
+REGION_COLUMNS = ["region", "status", "disagreement", "area_fraction", "n_blocks", "x0_px", "y0_px", "x1_px", "y1_px",
+                  "window_x0_px", "window_y0_px", "window_x1_px", "window_y1_px", "log10_nfa", "votes_against",
+                  "votes", "null_rate", "ring_agree", "ring_votes", "pattern"]
+
+
+def regions_table(details: dict[str, Any]) -> Table | None:
+    """Every region, flagged or set aside, with its box, test and votes; None when there is none.
+
+    The blocks of each region stay in ``findings.json`` (``details.regions[].blocks``).
+    """
+    listed = [("flagged", r) for r in details.get("regions", [])]
+    listed += [("set aside", r) for r in details.get("regions_set_aside", [])]
+    if not listed:
+        return None
+    rows = [[r["id"], status, _KIND_WORDS.get(r["kind"], r["kind"]), r["area_fraction"], r.get("n_blocks"),
+             *r["bbox_px"], *r.get("window_px", [None] * 4), r["log10_nfa"], r["votes_against"], r["votes"],
+             r.get("null_rate"), r.get("ring_agree"), r.get("ring_votes"), r.get("pattern")] for status, r in listed]
+    return Table(REGION_COLUMNS, rows, "every region whose votes disagree with the photo's phase: box, NFA, votes")
+
+
 def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSection:
-    """The section for one CFA finding: map, numbers, the test, method and limitations."""
+    """The section for one CFA finding: map, numbers, the test, method and limitations.
+
+    The regions go to ``cfa-regions.csv`` beside the report; the page lists the first few.
+    """
     d = finding.details
     regions = d.get("regions", [])
     thresholds = d.get("thresholds", {})
@@ -79,7 +105,9 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
         "pattern_tiles": pattern.get("n_tiles"),
         "pattern_p": _p_text(pattern.get("log10_p")) if pattern else None,
         "pattern_alpha": pattern.get("alpha"),
-        "regions": _region_rows(regions),
+        "regions": _region_rows(regions)[:SHOWN_REGIONS],
+        "n_regions": len(regions),
+        "n_set_aside": len(d.get("regions_set_aside", [])),
         "references": list(REFERENCES),
     }
     figures = {}
@@ -89,6 +117,7 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
             f"Each block of {d['block_px']} x {d['block_px']} pixels tinted by the mosaic phase it votes for: clear, "
             "the photo's phase; red, green on the other diagonal; orange, red and blue swapped; grey, no vote. "
             "Detected regions are outlined in cyan and numbered as in the table.")
+    table = regions_table(d)
     template = files(__package__).joinpath("templates/section.html.j2").read_text(encoding="utf-8")
     return ReportSection(title="Colour filter array (demosaicing) consistency", template=template,
-                         context=context, figures=figures)
+                         context=context, figures=figures, tables={"regions": table} if table else {})

@@ -108,6 +108,23 @@ def _shown(value: float, digits: int) -> str:
     return f"{round(value, digits) + 0.0:.{digits}f}"
 
 
+def _headline(status: Status, n_keypoints: int, records: list[dict[str, Any]], best: dict[str, Any] | None,
+              min_keypoints: int) -> str:
+    """The finding in one sentence for page 1: where the best candidate copy lies and its net grain peak."""
+    if status is Status.INCONCLUSIVE:
+        return (f"Inconclusive: {n_keypoints} keypoints ({min_keypoints} needed) and no smooth area whose grain "
+                f"repeats.")
+    if best is None:
+        found = (f"{len(records)} candidate(s), none with grain to compare" if records else
+                 "no candidate pair of regions")
+        return f"No copied region found: {n_keypoints} keypoints, {found}."
+    points = best["target_px"] or best["source_px"]
+    where = "" if not points else " near ({:.0f}, {:.0f}) px".format(*np.mean(points, axis=0))
+    dx, dy = (_shown(v, 0) for v in best["translation_px"])
+    return (f"Best candidate copy{where}, shifted by ({dx}, {dy}) px: net grain peak {best['net_peak']:.2f} "
+            f"(copies score near 1).")
+
+
 def _summary(status: Status, n_keypoints: int, records: list[dict[str, Any]], best: dict[str, Any] | None,
              min_keypoints: int) -> str:
     if status is Status.INCONCLUSIVE:
@@ -224,8 +241,9 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
         "elapsed_s": marks,
     }
     summary = _summary(status, matches.n_keypoints, records, best, int(params["min_keypoints"]))
+    headline = _headline(status, matches.n_keypoints, records, best, int(params["min_keypoints"]))
     if status is Status.INCONCLUSIVE:
-        return DetectorResult(status, summary, details=details)
+        return DetectorResult(status, summary, details=details, headline=headline)
     # A negative net peak (a correlation higher off the alignment than at it,
     # a structure; or a pattern that keeps more one step further on) is
     # clipped to 0. Kept as the lower half of the score, it
@@ -233,7 +251,7 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     # 0.51 against 0.56) but a linear logistic calibration fits it worse:
     # copies of low peak fell below LR 1 and the ELUB bounds narrowed.
     score = None if best is None else round(float(np.clip(best["net_peak"], 0.0, 1.0)), 4)
-    return DetectorResult(status, summary, score=score, details=details)
+    return DetectorResult(status, summary, score=score, details=details, headline=headline)
 
 
 def best_hypothesis(details: Mapping[str, Any]) -> dict[str, Any] | None:

@@ -97,7 +97,8 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
     found = votes(evidence, params)
     if found is None:
         return DetectorResult(Status.INCONCLUSIVE, "Inconclusive: the JPEG's DCT coefficients could not be read.",
-                              details={"jpeglib": jpeglib.__version__})
+                              details={"jpeglib": jpeglib.__version__},
+                              headline="Inconclusive: the JPEG's DCT coefficients could not be read.")
     coef: LumaCoefficients = found["coef"]
     table = _table(found["primaries"])
     n_used = sum(r["used"] for r in table)
@@ -112,7 +113,9 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
             f"Inconclusive: no earlier JPEG quantisation found ({n_used} of {len(table)} frequencies show one; "
             f"{params['min_frequencies']} needed). A photo compressed once, as a camera original is, shows none; "
             f"nor does one resized or cropped off its grid after an earlier save. This trace then says nothing.",
-            details=details)
+            details=details,
+            headline=f"Inconclusive: no earlier JPEG quantisation found ({n_used} of {len(table)} frequencies show "
+                     f"one; {params['min_frequencies']} needed).")
     informative, single, rates = found["informative"], found["single"], found["rates"]
     rho = overdispersion(informative, single, rates)
     windows, n_tests = scan(informative, single, rates, rho, tuple(int(s) for s in params["window_blocks"]),
@@ -133,6 +136,8 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
     if best is None or best.log10_nfa >= 0:
         summary = (f"An earlier JPEG save is found (primary steps {primary} on {n_used} frequencies), and no window "
                    f"of blocks lacks its trace more than the photo's own variation explains.")
+        headline = (f"An earlier JPEG save shows on {n_used} frequencies; no window lacks its trace beyond the "
+                    f"photo's own variation.")
     else:
         px = 8 * best.size
         summary = (f"An earlier JPEG save is found (primary steps {primary} on {n_used} frequencies). A {px} x {px} "
@@ -140,7 +145,9 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
                    f"voting single compression where {best.expected:.0%} is the photo's rate (NFA 10^"
                    f"{best.log10_nfa:.1f}). Content pasted after the earlier save looks like this; so does an area "
                    f"processed locally before the last one. Its strength is the calibrated likelihood ratio.")
-    return DetectorResult(Status.OK, summary, score=round(score, 4), details=details)
+        headline = (f"A {px} x {px} px window at ({8 * best.col}, {8 * best.row}) lacks the earlier JPEG "
+                    f"quantisation ({best.k} of {best.n} blocks, NFA 10^{best.log10_nfa:.1f}).")
+    return DetectorResult(Status.OK, summary, score=round(score, 4), details=details, headline=headline)
 
 
 def regions_mask(details: Mapping[str, Any], shape: tuple[int, int]) -> np.ndarray:

@@ -306,6 +306,31 @@ def _summary(details: dict[str, Any]) -> str:
             f"is.{crop}")
 
 
+def _headline(details: dict[str, Any]) -> str:
+    """The finding in one sentence for page 1: where a region departs from the main grid, or the grid alone."""
+    main = details["main_grid"]
+    dx, dy = main["origin"]
+    hits = [r for r in details["regions"] if r["meaningful"]]
+    if not hits:
+        if not main["significant"]:
+            if details.get(PROCESSING_KEY):
+                return "No JPEG grid is significant; every region voting for one is explained by processing."
+            return (f"Inconclusive: no JPEG block grid is significant (best origin ({dx}, {dy}), NFA "
+                    f"{nfa_text(main['log10_nfa'])}) and no region votes for one.")
+        crop = "; the photo was probably cropped after compression" if details["cropped"] else ""
+        return (f"Main JPEG grid at ({dx}, {dy}) (NFA {nfa_text(main['log10_nfa'])}){crop}; no region votes "
+                f"significantly for another grid.")
+    r = hits[0]
+    x0, y0, x1, y1 = r["bbox_px"]
+    where = f"at x {x0}–{x1}, y {y0}–{y1}"
+    test = f"NFA {nfa_text(r['log10_nfa'])}" + (f"; {len(hits) - 1} more region(s) too" if len(hits) > 1 else "")
+    if not main["significant"]:
+        return f"Region {where} carries a JPEG grid at ({r['grid'][0]}, {r['grid'][1]}) that the rest lacks ({test})."
+    if r["stage"] == "missing":
+        return f"Region {where} lacks the compression of the main JPEG grid ({dx}, {dy}) ({test})."
+    return f"Region {where} carries another JPEG grid, at ({r['grid'][0]}, {r['grid'][1]}) ({test})."
+
+
 def _saved_again(lum: Luminance, significant: bool, details: dict[str, Any]) -> dict[str, Any] | None:
     """A compression before the file's own, when the grid shows one: its kind, sentence and evidence."""
     lattice = details.get("lattice") or {}
@@ -416,7 +441,9 @@ def analyse_luminance(lum: Luminance, params: Mapping[str, Any],
         return DetectorResult(Status.INCONCLUSIVE,
                               f"Inconclusive: the photo ({shape[1]}x{shape[0]} pixels) is too small to hold a "
                               f"measurable JPEG grid (at least {MIN_SIDE} pixels a side).",
-                              details={**base, "elapsed_s": marks})
+                              details={**base, "elapsed_s": marks},
+                              headline=f"Inconclusive: the photo ({shape[1]}x{shape[0]} px) is too small for a "
+                                       f"measurable JPEG grid.")
     t = time.perf_counter()
     votes = _votes_of(lum.y)
     t = _timed(marks, "votes", t)
@@ -503,9 +530,10 @@ def analyse_luminance(lum: Luminance, params: Mapping[str, Any],
     _timed(marks, "report_data", t)
     details["elapsed_s"] = marks
     if not significant and not evidence and warp is None:
-        return DetectorResult(Status.INCONCLUSIVE, _summary(details), details=details)
+        return DetectorResult(Status.INCONCLUSIVE, _summary(details), details=details, headline=_headline(details))
     nfa = float(min(1.0, 10.0 ** details["regions"][0]["log10_nfa"])) if evidence else 1.0
-    return DetectorResult(status=Status.OK, summary=_summary(details), score=1.0 - nfa, nfa=nfa, details=details)
+    return DetectorResult(status=Status.OK, summary=_summary(details), score=1.0 - nfa, nfa=nfa, details=details,
+                          headline=_headline(details))
 
 
 def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:

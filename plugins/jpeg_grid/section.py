@@ -6,7 +6,7 @@ from importlib.resources import files
 from typing import Any
 
 from forensics_core import DetectorFinding, Evidence, Status
-from forensics_core.report import Figure, ReportSection
+from forensics_core.report import Figure, ReportSection, Table
 
 from .spec import REFERENCES
 from .figures import map_png, vote_map_png
@@ -51,13 +51,38 @@ def _lattice_context(lattice: dict[str, Any] | None) -> dict[str, Any] | None:
     }
 
 
-def _vote_table(shares: list[list[float]], main: list[int]) -> list[list[dict[str, Any]]]:
-    return [[{"text": f"{100 * s:.1f}", "main": [dx, dy] == main} for dx, s in enumerate(row)]
-            for dy, row in enumerate(shares)]
+SHOWN_REGIONS = 3
+"""Regions listed on the page; all those listed in the finding are in the CSV file."""
+
+
+def _tables(details: dict[str, Any]) -> dict[str, Table]:
+    """The share of votes of each of the 64 grid origins, and every region listed, with its box and test.
+
+    The tiles of each region stay in ``findings.json`` (``details.regions[].tiles_rle``).
+    """
+    tables = {}
+    if "vote_shares" in details:
+        main = details["main_grid"]["origin"]
+        tables["votes"] = Table(["dx", "dy", "share", "main"],
+                                [[dx, dy, share, [dx, dy] == main]
+                                 for dy, row in enumerate(details["vote_shares"]) for dx, share in enumerate(row)],
+                                "the share of the votes cast for each of the 64 grid origins")
+    if details.get("regions"):
+        rows = [[r["id"], r["grid"][0], r["grid"][1], row["stage"], *r["bbox_px"], r["area_fraction"],
+                 r.get("area_px"), r["pixels"], r["density"], r["log10_nfa"], r["meaningful"], row["verdict"]]
+                for r, row in zip(details["regions"], _region_rows(details["regions"]))]
+        tables["regions"] = Table(["region", "dx", "dy", "found_by", "x0_px", "y0_px", "x1_px", "y1_px",
+                                   "area_fraction", "area_px", "voting_pixels", "density", "log10_nfa", "meaningful",
+                                   "verdict"], rows, "every region listed: its grid, box, votes and NFA")
+    return tables
 
 
 def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSection:
-    """The section for one JPEG grid finding: map, grid, regions, test, method and limitations."""
+    """The section for one JPEG grid finding: map, grid, regions, test, method and limitations.
+
+    The 64 origins' votes and every region listed go to CSV files beside the
+    report; the page lists the first regions.
+    """
     details = finding.details
     main = details["main_grid"]
     regions = details.get("regions", [])
@@ -78,9 +103,9 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
         "cropped": details.get("cropped", False),
         "quality": details.get("jpeg_quality_estimate"),
         "luminance_note": details["luminance"]["note"],
-        "regions": _region_rows(regions),
+        "regions": _region_rows(regions)[:SHOWN_REGIONS],
+        "n_regions": len(regions),
         "n_meaningful": len(meaningful),
-        "vote_table": _vote_table(details["vote_shares"], main["origin"]) if "vote_shares" in details else [],
         "thresholds": thresholds,
         "n_tests": nfa_text(details["log10_n_tests"]) if "log10_n_tests" in details else None,
         "min_region_px": details.get("min_region_px"),
@@ -103,4 +128,5 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
                                   "saturated areas), with the regions outlined. A pasted region whose own grid shows "
                                   "through is dark here.")
     template = files(__package__).joinpath("templates/section.html.j2").read_text(encoding="utf-8")
-    return ReportSection(title="JPEG block grid", template=template, context=context, figures=figures)
+    return ReportSection(title="JPEG block grid", template=template, context=context, figures=figures,
+                         tables=_tables(details))

@@ -222,6 +222,41 @@ def _summary(result: ConsistencyResult, records: list[dict[str, Any]]) -> str:
             f"no line or region departs significantly (image-level p = {result.p_value:.2g}).")
 
 
+def _ids(ids: list[int], shown: int = 3) -> str:
+    """Line numbers for a headline: the first few, then how many more."""
+    text = ", ".join(str(i) for i in ids[:shown])
+    return text + (f" and {len(ids) - shown} more" if len(ids) > shown else "")
+
+
+def _where(box: dict[str, float]) -> str:
+    return f"x {box['x0']:.0f}–{box['x1']:.0f}, y {box['y0']:.0f}–{box['y1']:.0f}"
+
+
+def _headline(result: ConsistencyResult, records: list[dict[str, Any]], regions: list[dict[str, float]]) -> str:
+    """The finding in one sentence for page 1: the verdict, the lens's k1 and where any departure lies."""
+    n_inf = sum(r["informative"] for r in records)
+    if result.verdict == "inconclusive":
+        return f"Inconclusive: {n_inf} informative straight lines of {len(records)}, too few to measure the lens."
+    one = result.model.one_term
+    lens = f"k1 = {one.k1:.3f} ± {one.k1_stderr:.3f}"
+    p = f"p = {result.p_value:.2g}"
+    if result.verdict == "inconsistent":
+        flagged = [i + 1 for i in result.flagged_ids]
+        ids = _ids(flagged)
+        where = f" at {_where(regions[0])}" if regions else ""
+        if result.evidence == "region" and result.region.alternative == "another lens":
+            return (f"Lines {ids}{where} follow another lens, k1 about {result.region.donor_k1:.2f} (photo's "
+                    f"{one.k1:.3f}); {p}.")
+        if result.evidence == "region":
+            return f"Lines {ids}{where} bend about a displaced centre, as a moved copy's do ({p})."
+        lines = f"Line {ids}{where} departs" if len(flagged) == 1 else f"Lines {ids}{where} depart"
+        return f"{lines} from the photo's lens model ({p})."
+    if result.outlier_ids:
+        return (f"{n_inf} lines fit one lens, {lens}; lines {_ids([i + 1 for i in result.outlier_ids])} depart "
+                f"alone, no region departs ({p}).")
+    return f"All {n_inf} informative lines fit one lens model, {lens}; no line or region departs ({p})."
+
+
 def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     """Run the detector on a photo's luma.
 
@@ -242,7 +277,9 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     if min(shape) < MIN_SIDE_PX:
         return DetectorResult(Status.INCONCLUSIVE, f"Inconclusive: the photo ({shape[1]} x {shape[0]} pixels) is too "
                               f"small to hold lines long enough to measure distortion (at least {MIN_SIDE_PX} pixels "
-                              f"a side).", details={"image_size": [shape[1], shape[0]]})
+                              f"a side).", details={"image_size": [shape[1], shape[0]]},
+                              headline=f"Inconclusive: the photo ({shape[1]} x {shape[0]} px) is too small to measure "
+                                       f"lens distortion.")
     timer = _Timer({})
     t = time.perf_counter()
     edges = subpixel_edges(luma, sigma=float(params["sigma"]))
@@ -287,12 +324,14 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
         "scale_px": norm_scale(shape),
         "elapsed_s": timer.marks,
     }
+    headline = _headline(result, records, details["regions_px"])
     if not result.informative:
-        return DetectorResult(Status.INCONCLUSIVE, _summary(result, records), details=details)
+        return DetectorResult(Status.INCONCLUSIVE, _summary(result, records), details=details, headline=headline)
     return DetectorResult(
         status=Status.OK,
         summary=_summary(result, records),
         score=1.0 - result.p_value,
         p_value=result.p_value,
         details=details,
+        headline=headline,
     )

@@ -87,7 +87,7 @@ def k1_plot_svg(details: Mapping[str, Any]) -> bytes:
     # renderer 0.3 s; the axes, band and labels stay vector.
     matplotlib.rcParams["svg.fonttype"] = "none"
     lines = [ln for ln in details.get("lines", []) if ln.get("k1") is not None]
-    fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=100)
+    fig, ax = plt.subplots(figsize=(4.3, 2.9), dpi=100)
     model = details.get("global_model")
     if model:
         ax.axhspan(model["k1"] - model["k1_stderr"], model["k1"] + model["k1_stderr"], color="0.85", zorder=0)
@@ -111,10 +111,11 @@ def k1_plot_svg(details: Mapping[str, Any]) -> bytes:
         lo, hi = np.percentile(ks, [2, 98])
         pad = max(0.05, 0.2 * (hi - lo))
         ax.set_ylim(lo - pad, hi + pad)
-    ax.set_xlabel("signed distance from the image centre (normalised)")
-    ax.set_ylabel("k1 (hollow: paper's estimator)")
+    ax.set_xlabel("signed distance from the image centre (normalised)", fontsize=8)
+    ax.set_ylabel("k1 (hollow: paper's estimator)", fontsize=8)
+    ax.tick_params(labelsize=7)
     ax.axvline(0, color="0.7", lw=0.5)
-    ax.legend(fontsize=7, loc="best")
+    ax.legend(fontsize=6, loc="best")
     fig.tight_layout()
     out = io.BytesIO()
     fig.savefig(out, format="svg", metadata={"Date": None}, dpi=200)

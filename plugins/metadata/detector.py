@@ -22,7 +22,7 @@ import time
 from collections.abc import Mapping
 from typing import Any
 
-from forensics_core import DetectorFinding, DetectorResult, Evidence, Status
+from forensics_core import HEADLINE_WORDS, DetectorFinding, DetectorResult, Evidence, Status
 
 from . import lens_check
 from .checks import APPLICABLE, Check, datetimes, dimensions, dimensions_changed, exif_presence, software_tag
@@ -31,7 +31,6 @@ from .quantisation import quantisation_check
 from .spec import LENS_DETECTOR
 from .thumbnail import ThumbnailThresholds, thumbnail_check
 from .xmp import xmp_agents
-
 
 
 def thresholds(params: Mapping[str, Any]) -> ThumbnailThresholds:
@@ -64,6 +63,25 @@ def _summary(checks: list[Check]) -> str:
                 f"({'; '.join(suspicious)}); metadata is never proof on its own.")
     return (f"All {len(applicable)} applicable metadata checks are consistent with a camera original; "
             "metadata is never proof on its own.")
+
+
+def _headline(checks: list[Check]) -> str:
+    """The finding in one sentence for page 1: which checks are suspicious, or that none is."""
+    suspicious = [c.title for c in checks if c.outcome == "suspicious"]
+    applicable = [c for c in checks if c.outcome in APPLICABLE]
+    notes = sum(c.outcome == "note" for c in checks)
+    if not applicable:
+        return "Inconclusive: the file carries no metadata these checks can use."
+    if not suspicious:
+        noted = f" ({notes} note(s))" if notes else ""
+        return (f"None of the {len(applicable)} applicable metadata checks is suspicious{noted}; metadata is never "
+                f"proof on its own.")
+    lead = f"{len(suspicious)} of {len(applicable)} applicable metadata checks suspicious"
+    named = f"{lead}: {'; '.join(suspicious)}; metadata is never proof on its own."
+    # Check titles are as long as their checks need; past the limit, the first one names the kind.
+    if len(named.split()) <= HEADLINE_WORDS:
+        return named
+    return f"{lead}, first {suspicious[0]}; never proof on its own."
 
 
 def analyse(evidence: Evidence, params: Mapping[str, Any], prior: Mapping[str, DetectorFinding]) -> DetectorResult:
@@ -130,5 +148,6 @@ def analyse(evidence: Evidence, params: Mapping[str, Any], prior: Mapping[str, D
         "elapsed_s": marks,
     }
     if not applicable:
-        return DetectorResult(Status.INCONCLUSIVE, _summary(checks), details=details)
-    return DetectorResult(Status.OK, _summary(checks), score=n_suspicious / len(applicable), details=details)
+        return DetectorResult(Status.INCONCLUSIVE, _summary(checks), details=details, headline=_headline(checks))
+    return DetectorResult(Status.OK, _summary(checks), score=n_suspicious / len(applicable), details=details,
+                          headline=_headline(checks))

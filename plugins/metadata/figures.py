@@ -106,7 +106,7 @@ def lens_plot_svg(lens: Mapping[str, Any]) -> bytes:
 
     matplotlib.rcParams["svg.hashsalt"] = "forensics"
     r = np.linspace(0.01, lens["r_max"], 200)
-    fig, ax = plt.subplots(figsize=(6.4, 3.4), dpi=100)
+    fig, ax = plt.subplots(figsize=(4.3, 2.9), dpi=100)
     exact = inverse(lens["model"], tuple(lens["terms"]), r * lens["scale"]) / lens["scale"]
     ax.plot(r, exact / (lens["magnification"] * r) - 1, color="0.2", lw=1.2,
             label=f"lensfun {lens['model']} at {lens['focal_mm']:g} mm")
@@ -120,9 +120,10 @@ def lens_plot_svg(lens: Mapping[str, Any]) -> bytes:
                 label=f"measured: k1 = {k1:+.4f} ± {se:.4f}, k2 = {k2:+.4f}")
     ax.axhline(0, color="0.7", lw=0.5)
     ax.axvline(1, color="0.8", lw=0.5, ls=":")
-    ax.set_xlabel("radius (normalised: half the longer side = 1; dotted: middle of the long edge)")
-    ax.set_ylabel("relative radial displacement")
-    ax.legend(fontsize=7, loc="best")
+    ax.set_xlabel("radius (half the longer side = 1; dotted: middle of the long edge)", fontsize=7)
+    ax.set_ylabel("relative radial displacement", fontsize=8)
+    ax.tick_params(labelsize=7)
+    ax.legend(fontsize=6, loc="best")
     fig.tight_layout()
     out = io.BytesIO()
     fig.savefig(out, format="svg", metadata={"Date": None})

@@ -89,13 +89,16 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
             Status.INCONCLUSIVE,
             f"Inconclusive: {details['valid_blocks']} blocks of 8 x 8 pixels are neither clipped to black or white "
             f"nor past the edge; {params['min_blocks']} are needed to compare noise between regions.",
-            details=details)
+            details=details,
+            headline=f"Inconclusive: only {details['valid_blocks']} unclipped 8 x 8 blocks ({params['min_blocks']} "
+                     f"needed) to compare noise between regions.")
     if np.ptp(features.energy[features.valid]) == 0:
         details["elapsed_s"] = round(time.perf_counter() - t, 4)
         return DetectorResult(
             Status.INCONCLUSIVE,
             "Inconclusive: every block has the same fine-grain energy (a synthetic or flattened picture without "
-            "noise), so there is no noise to compare between regions.", details=details)
+            "noise), so there is no noise to compare between regions.", details=details,
+            headline="Inconclusive: every block has the same fine-grain energy; there is no noise to compare.")
     z, used = standardised(features, int(params["intensity_bins"]), int(params["texture_bins"]),
                            int(params["min_cell_blocks"]), float(params["scale_floor"]), float(params["z_clip"]))
     windows, spreads = scan(z, used, tuple(int(f) for f in params["window_fractions"]),
@@ -107,7 +110,8 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
         return DetectorResult(
             Status.INCONCLUSIVE,
             "Inconclusive: too few windows have enough comparable blocks to measure how noise varies in this "
-            "photo.", details=details)
+            "photo.", details=details,
+            headline="Inconclusive: too few windows have enough comparable blocks to measure how noise varies.")
     best = windows[0]
     listed = distinct(windows, float(params["list_threshold"]), int(params["max_windows_listed"]))
     cap = float(params["score_cap"])
@@ -126,7 +130,11 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
                   f"No window departs by {params['list_threshold']} or more. ")
                + "Noise varies in authentic photos too (denoising, sharpening, the scene); the strength is the "
                  "calibrated likelihood ratio.")
-    return DetectorResult(Status.OK, summary, score=round(min(abs(best.deviation), cap) / cap, 4), details=details)
+    headline = (f"Window of {px} px at ({BLOCK * best.col}, {BLOCK * best.row}) is {kind} like content elsewhere "
+                f"by {abs(best.deviation):.1f} spreads; {len(listed)} window(s) depart by {params['list_threshold']} "
+                f"or more.")
+    return DetectorResult(Status.OK, summary, score=round(min(abs(best.deviation), cap) / cap, 4), details=details,
+                          headline=headline)
 
 
 def regions_mask(details: Mapping[str, Any], shape: tuple[int, int]) -> np.ndarray:

@@ -28,7 +28,7 @@ from typing import Any
 
 import c2pa
 
-from forensics_core import SMALL, DetectorResult, Evidence, Status, read_limited
+from forensics_core import HEADLINE_WORDS, SMALL, DetectorResult, Evidence, Status, read_limited
 
 from .credentials import AI_SOURCE_TYPES, Credentials, read
 
@@ -36,7 +36,6 @@ from .credentials import AI_SOURCE_TYPES, Credentials, read
 EDITS = ("c2pa.edited", "c2pa.filtered", "c2pa.color_adjustments", "c2pa.cropped", "c2pa.resized",
          "c2pa.drawing", "c2pa.placed", "c2pa.removed", "c2pa.orientation", "c2pa.converted", "c2pa.transcoded",
          "c2pa.repackaged", "c2pa.redacted", "c2pa.edited.metadata")
-
 
 
 def _sidecar(evidence: Evidence, params: Mapping[str, Any]) -> tuple[bytes | None, str | None]:
@@ -83,6 +82,22 @@ def _summary(cred: Credentials, edited: list[str]) -> tuple[str, float | None]:
                 f"own account the content is not as captured.", 0.5)
     return (f"Valid Content Credentials ({trust}), {by}: the content is unchanged since it was signed. This does not "
             f"show that the scene was real or that the signer is honest.", 0.0)
+
+
+def _headline(cred: Credentials, edited: list[str]) -> str:
+    """The finding in one sentence for page 1; the signer is named when the sentence stays short enough."""
+    who = cred.signer.get("common_name")
+    if cred.binding_broken or cred.integrity_broken:
+        told = "Invalid Content Credentials{}: the file changed after it was signed."
+    elif cred.state not in ("Valid", "Trusted"):
+        told = "Inconclusive: the C2PA SDK does not validate the Content Credentials{}."
+    elif edited or [t for t in cred.source_types if t in AI_SOURCE_TYPES]:
+        told = "Valid Content Credentials{} declare edits or a generative source: not as captured, by the signer's account."
+    else:
+        told = ("Valid Content Credentials{}: the content is unchanged since signing, which does not show the scene "
+                "was real.")
+    named = told.format(f" signed by {who}") if who else told.format("")
+    return named if len(named.split()) <= HEADLINE_WORDS else told.format("")
 
 
 def _ingredients_text(cred: Credentials) -> str:
@@ -143,19 +158,22 @@ def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
     if own_error:
         details["error"] = own_error
         return DetectorResult(Status.INCONCLUSIVE, "Inconclusive: the file carries a C2PA manifest store that cannot "
-                              f"be read ({own_error}).{_beside(side, side_error)}", details=details)
+                              f"be read ({own_error}).{_beside(side, side_error)}", details=details,
+                              headline="Inconclusive: the file's C2PA manifest store cannot be read.")
     cred = own or side
     if cred is None:
         tail = (f" The .c2pa file beside it cannot be read ({side_error}); that is a fault of that file, not of the "
                 "photo.") if side_error else ""
         return DetectorResult(Status.INCONCLUSIVE, "Inconclusive: no Content Credentials. Most photos carry none; "
-                              f"their absence says nothing about the content.{tail}", details=details)
+                              f"their absence says nothing about the content.{tail}", details=details,
+                              headline="Inconclusive: no Content Credentials in the file; most photos carry none.")
     edited = sorted({a["action"] for a in cred.actions if a["action"] in EDITS})
     summary, score = _summary(cred, edited)
     summary += _ingredients_text(cred) + (_beside(side, side_error) if own is not None else "")
     details.update(credentials=asdict(cred), edits=edited)
     if own is not None and side is not None:
         details["sidecar_credentials"] = asdict(side)
+    headline = _headline(cred, edited)
     if score is None:
-        return DetectorResult(Status.INCONCLUSIVE, f"Inconclusive: {summary}", details=details)
-    return DetectorResult(Status.OK, summary, score=score, details=details)
+        return DetectorResult(Status.INCONCLUSIVE, f"Inconclusive: {summary}", details=details, headline=headline)
+    return DetectorResult(Status.OK, summary, score=score, details=details, headline=headline)

@@ -40,7 +40,7 @@ def test_section_of_a_spliced_photo(host, tmp_path):
     section = section_for(host, finding, ev)
     assert section.failure is None and section.body is not None
     body = str(section.body)
-    for text in ("The photo's mosaic", "The test", "Regions", "Method", "Limitations", "Popescu",
+    for text in ("The photo's mosaic", "The test", "Regions", "Method and limitations", "Popescu",
                  "green on the other diagonal", "NFA"):
         assert text in body, text
     assert [f.key for f in section.figures] == ["map"] and section.figures[0].used

@@ -41,7 +41,7 @@ def test_section_of_a_spliced_photo_has_map_regions_test_method_and_limitations(
     section = section_for(host, finding, ev)
     assert section.failure is None and section.body is not None
     body = str(section.body)
-    for text in ("Main grid", "Regions on another grid", "The test", "Method", "Limitations", "(5, 2)",
+    for text in ("Main grid", "Regions on another grid", "The test", "Method and limitations", "(5, 2)",
                  "Nikoukhah", "meaningful"):
         assert text in body, text
     keys = {f.key for f in section.figures}

@@ -86,7 +86,7 @@ def test_makernote_serial_against_exif(data_dir):
     assert checks["previews"]["outcome"] in ("note", "not available")
 
 
-def test_the_report_appendix_lists_exiftool_groups(data_dir, tmp_path):
+def test_the_report_appendix_counts_exiftool_groups_and_every_tag_is_beside_it(data_dir, tmp_path):
     import subprocess
     import sys
 
@@ -96,7 +96,9 @@ def test_the_report_appendix_lists_exiftool_groups(data_dir, tmp_path):
     assert done.returncode == 0, done.stderr
     (report,) = tmp_path.rglob("report.html")
     html = report.read_text(encoding="utf-8")
-    assert "Appendix C. Metadata (ExifTool)" in html and "<h3>Nikon (" in html and "Metadata read by" in html
+    assert "Appendix C. Metadata (ExifTool)" in html and "Nikon " in html and "Metadata read by" in html
+    groups = {line.split(",", 1)[0] for line in (report.parent / "metadata.csv").read_text(encoding="utf-8").splitlines()[1:]}
+    assert {"IFD0", "ExifIFD", "Nikon"} <= groups
 
 
 @pytest.mark.skipif(shutil.which("exiftool") is None, reason="needs ExifTool")

@@ -105,7 +105,7 @@ def test_report_states_real_figures_first_then_synthetic(run, monkeypatch):
 
     shipped[SHIPPED_REAL] = None
     html = _environment().get_template("_error_rates.html.j2").render(error_rates=shipped_error_rates(findings))
-    assert "No validation record on real camera photos is shipped" in html and "5.1 Synthetic photos" in html
+    assert "No validation record on real camera photos is shipped" in html and "4.1 Synthetic photos" in html
 
     given = given_error_rates(findings, record, "the validation record x.json")
     assert len(given.records) == 1 and not given.missing
