@@ -46,19 +46,35 @@ def compile_sources(tree: Path) -> str:
 
 
 def tree_env(tree: Path | None, folder: Path) -> dict[str, str]:
-    """This process's environment, with ``tree``'s ``forensics_core`` and plugins first on the import path.
+    """This process's environment, with ``tree``'s ``forensics_core``, templates and plugins first on the import path.
 
     The installed entry points name the plugins' modules
     (``forensics_plugins.*``): a link of that name in ``folder`` to
-    ``tree/plugins``, on the path after ``tree``, makes them resolve to that
-    tree. With ``tree`` None, the environment as it is (the installed tree).
+    ``tree/plugins`` makes them resolve to that tree. The report's templates
+    are the package ``forensics_core.templates``, which the source tree keeps
+    in ``tree/templates`` and the editable install maps to this repository's:
+    ``folder/forensics_core`` is therefore ``tree``'s package laid out as a
+    wheel installs it, links to each of its entries and ``templates``, so a
+    baseline renders its reports with its own templates. With ``tree`` None,
+    the environment as it is (the installed tree).
     """
     env = dict(os.environ)
     if tree is not None:
         link = folder / "forensics_plugins"
         if not link.exists():
             link.symlink_to(tree / "plugins")
-        env["PYTHONPATH"] = os.pathsep.join([str(tree), str(folder)])
+        package = folder / "forensics_core"
+        if not package.exists():
+            package.mkdir()
+            for entry in (tree / "forensics_core").iterdir():
+                if entry.name != "__pycache__":
+                    (package / entry.name).symlink_to(entry)
+            if not (package / "templates").exists():
+                (package / "templates").symlink_to(tree / "templates")
+            # The package's own modules are now found here, so their bytecode is written here, once, as for a wheel.
+            subprocess.run([sys.executable, "-m", "compileall", "-q", "-l", str(package)], check=True,
+                           stdout=subprocess.DEVNULL)
+        env["PYTHONPATH"] = os.pathsep.join([str(folder), str(tree)])
     return env
 
 

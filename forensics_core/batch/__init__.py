@@ -11,6 +11,7 @@ Stages, one module each:
 ``local``    local worker processes, a dead worker retried once;
 ``cluster``  the same work as tasks on a Dask distributed cluster;
 ``summary``  ``summary.json`` and ``summary.csv``;
+``index``    ``index.html``, the batch on one page, a row per photo;
 ``runner``   the whole run, with the progress bar and the end tables.
 """
 

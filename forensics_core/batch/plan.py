@@ -31,7 +31,8 @@ from .resume import LOCK_NAME, Expected, is_complete, is_temp_name, recorded_sha
 
 SUMMARY_JSON = "summary.json"
 SUMMARY_CSV = "summary.csv"
-_RESERVED = {".", "..", SUMMARY_JSON, SUMMARY_CSV, LOCK_NAME}
+INDEX_HTML = "index.html"
+_RESERVED = {".", "..", SUMMARY_JSON, SUMMARY_CSV, INDEX_HTML, LOCK_NAME}
 
 
 @dataclass

@@ -1,4 +1,4 @@
-"""Run a batch: find and hash the photos, plan, hand the work to workers, record the summary."""
+"""Run a batch: find and hash the photos, plan, hand the work to workers, record the summary and the index."""
 
 from __future__ import annotations
 
@@ -23,9 +23,10 @@ from ..plugins import PluginHost
 from ..signing import ExaminerKey
 from ..text import decoded, visible
 from .cluster import ClusterError, DaskPool
+from .index import BatchPhoto, write_index
 from .inputs import discover, hash_all
 from .local import Finished, LocalPool
-from .plan import Plan, make_plan
+from .plan import INDEX_HTML, Plan, make_plan
 from .resume import Expected, LockHeld, OutputLock, expected_parameters, link_folder, remove_temp_files
 from .summary import Row, counts, detector_names, fill_from_findings, previous_times, write_summary
 from .work import Settings, preload
@@ -76,6 +77,7 @@ class BatchResult:
     elapsed_s: float
     pool: str
     peaks_mb: dict[str, float | None] = field(default_factory=dict)
+    index_html: Path | None = None
 
     @property
     def failed(self) -> int:
@@ -285,7 +287,23 @@ def run_batch(request: BatchRequest, host: PluginHost, key: ExaminerKey | None, 
             elapsed = round(time.perf_counter() - started, 3)
             run = _run_record(request, settings, pool_name, elapsed, batch.peaks)
             json_path, csv_path = write_summary(out_dir, rows, detector_names(rows, list(options.detectors)), run)
-    return BatchResult(rows, json_path, csv_path, elapsed, pool_name, batch.peaks)
+            index = _write_index(plan, batch)
+    return BatchResult(rows, json_path, csv_path, elapsed, pool_name, batch.peaks, index)
+
+
+def _write_index(plan: Plan, batch: _Batch) -> Path | None:
+    """Write ``index.html`` for every photo of the plan; None (and a failure line) when it cannot be written.
+
+    The summary is the batch's record; a page that cannot be written is reported, not a reason to lose the run.
+    """
+    photos = [BatchPhoto(p.path, batch.rows[p.path],
+                         plan.folder(plan.entry_of[p.path]) if p.path in plan.entry_of else None)
+              for p in plan.photos]
+    try:
+        return write_index(plan.out_dir, photos)
+    except OSError as exc:
+        batch.fail_line(str(plan.out_dir / INDEX_HTML), f"cannot write the batch index: {exc.strerror or exc}")
+        return None
 
 
 def _run_record(request: BatchRequest, settings: Settings, pool: str, elapsed: float,
@@ -337,3 +355,5 @@ def print_summary(result: BatchResult, console: Console) -> None:
                   highlight=False)
     console.print(f"summary: {visible(str(result.summary_csv))}, {visible(str(result.summary_json))}", markup=False,
                   highlight=False)
+    if result.index_html is not None:
+        console.print(f"index: {visible(str(result.index_html))}", markup=False, highlight=False)
