@@ -154,7 +154,7 @@ WHERE_COLOURS = ("#d55e00", "#0072b2", "#009e73", "#cc79a7", "#e69f00", "#56b4e9
 with the common colour-vision deficiencies tell apart); the stylesheet's ``swatch-N`` classes repeat them."""
 
 WHERE_SIDE = 900
-"""Longest side of the Where figure, pixels: sharp on page 1 at about 150 mm wide."""
+"""Longest side of the photo as the report shows it (page 1's Where, section 2), pixels: sharp at 150 mm wide."""
 
 
 def where_figure(pixels: np.ndarray, masks: list[tuple[int, np.ndarray]], max_side: int = WHERE_SIDE) -> bytes:

@@ -425,7 +425,7 @@ def render_html(findings: Findings, evidence: Evidence, signature: SignatureInfo
         "orientation": (_ORIENTATIONS.get(ev.orientation, str(ev.orientation)) + "; recorded, not applied"
                         if ev.orientation is not None else "not recorded"),
         "camera_rows": _camera_rows(ev.exif),
-        "photo_src": images.data_url(images.preview(evidence.pixels), "image/jpeg"),
+        "photo_src": images.data_url(images.preview(evidence.pixels, images.WHERE_SIDE), "image/jpeg"),
         "thumbnail_src": images.data_url(thumbnail, "image/jpeg") if thumbnail else None,
         "thumbnail_note": (f"The EXIF data names a thumbnail, but it could not be read: {evidence.thumbnail.error}."
                            if evidence.thumbnail is not None else "The file carries no embedded thumbnail."),
