@@ -110,7 +110,7 @@ $(STAMP): pyproject.toml | $(PY) system-packages
 # every command compiled them again: 0.14 s of a 2 s run. A wheel is compiled
 # when installed; this does the same. Up-to-date files are skipped.
 bytecode: $(STAMP)
-	@$(PY) -m compileall -q forensics_core plugins >/dev/null
+	@$(PY) -m compileall -q forensics_core forensics_plugins >/dev/null
 
 clean:
 	rm -rf $(VENV) $(OUT) build *.egg-info

@@ -40,29 +40,34 @@ def compile_sources(tree: Path) -> str:
     trees of a comparison are compiled alike. Returns the line the benchmarks
     print about it.
     """
-    subprocess.run([sys.executable, "-m", "compileall", "-q", str(tree / "forensics_core"), str(tree / "plugins")],
+    subprocess.run([sys.executable, "-m", "compileall", "-q", str(tree / "forensics_core"), str(plugins_folder(tree))],
                    check=True, stdout=subprocess.DEVNULL)
     return f"bytecode of {tree} compiled, as a wheel install does"
+
+
+def plugins_folder(tree: Path) -> Path:
+    """The bundled plugins' folder of a source tree: ``forensics_plugins/``, or ``plugins/`` in trees before 2026-11-28."""
+    return tree / "forensics_plugins" if (tree / "forensics_plugins").is_dir() else tree / "plugins"
 
 
 def tree_env(tree: Path | None, folder: Path) -> dict[str, str]:
     """This process's environment, with ``tree``'s ``forensics_core``, templates and plugins first on the import path.
 
     The installed entry points name the plugins' modules
-    (``forensics_plugins.*``): a link of that name in ``folder`` to
-    ``tree/plugins`` makes them resolve to that tree. The report's templates
-    are the package ``forensics_core.templates``, which the source tree keeps
-    in ``tree/templates`` and the editable install maps to this repository's:
-    ``folder/forensics_core`` is therefore ``tree``'s package laid out as a
-    wheel installs it, links to each of its entries and ``templates``, so a
-    baseline renders its reports with its own templates. With ``tree`` None,
-    the environment as it is (the installed tree).
+    (``forensics_plugins.*``): a link of that name in ``folder`` to the
+    tree's plugins (:func:`plugins_folder`) makes them resolve to that tree.
+    ``folder/forensics_core`` is ``tree``'s package laid out as a wheel
+    installs it, links to each of its entries (and, in trees before
+    2026-11-28, to the top-level ``templates`` that the editable install
+    mapped to this repository's), so a baseline renders its reports with its
+    own templates. With ``tree`` None, the environment as it is (the
+    installed tree).
     """
     env = dict(os.environ)
     if tree is not None:
         link = folder / "forensics_plugins"
         if not link.exists():
-            link.symlink_to(tree / "plugins")
+            link.symlink_to(plugins_folder(tree))
         package = folder / "forensics_core"
         if not package.exists():
             package.mkdir()

@@ -47,7 +47,7 @@ with the same ``detector`` and ``spec`` modules, so that an older version can
 be run on the same suite, e.g. the committed one::
 
     mkdir -p /tmp/baseplug/lens_base
-    for f in $(git ls-tree --name-only HEAD plugins/lens_distortion/ | grep '\\.py$'); do
+    for f in $(git ls-tree --name-only HEAD forensics_plugins/lens_distortion/ | grep '\\.py$'); do
         git show HEAD:$f > /tmp/baseplug/lens_base/$(basename $f); done
     PYTHONPATH=/tmp/baseplug python benchmarks/lens_splices.py --module lens_base --out base.json
 

@@ -32,7 +32,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from harness import OUT
+from harness import OUT, plugins_folder
 
 
 def photo(mp: float) -> Path:
@@ -150,7 +150,7 @@ def main() -> None:
         with tempfile.TemporaryDirectory() as home:
             env = {**os.environ, "FORENSICS_HOME": home}
             if tree is not None:
-                (Path(home) / "forensics_plugins").symlink_to(tree / "plugins")
+                (Path(home) / "forensics_plugins").symlink_to(plugins_folder(tree))
                 env["PYTHONPATH"] = os.pathsep.join([str(tree), home])
             extra = ["--jobs", str(args.jobs)] if args.jobs and tree is None else []
             runs = [one_run(target, args.format, env, extra) for _ in range(args.runs)]

@@ -17,7 +17,7 @@ processed) and for all authentic photos. ``--list`` adds every suspicious
 outcome with its photo and sentence.
 
 ``--write`` stores the camera-original rates in
-``plugins/metadata/real_rates.json``, which the report quotes next to each
+``forensics_plugins/metadata/real_rates.json``, which the report quotes next to each
 check. The photos themselves are never copied: only counts, the set names
 and the date.
 """
@@ -34,7 +34,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_CORPUS = REPO.parent / "shared" / "data" / "real"
-RATES_FILE = REPO / "plugins" / "metadata" / "real_rates.json"
+RATES_FILE = REPO / "forensics_plugins" / "metadata" / "real_rates.json"
 APPLICABLE = ("consistent", "suspicious")
 # Sets whose photos were processed after capture (rotated): authentic scenes,
 # but not camera originals, so they are reported apart.

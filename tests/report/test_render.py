@@ -292,7 +292,7 @@ def test_templates_ship_in_a_regular_wheel(tmp_path):
     source.mkdir()
     for name in ("pyproject.toml", "README.md"):
         shutil.copy(root / name, source / name)
-    for name in ("forensics_core", "templates", "plugins"):
+    for name in ("forensics_core", "forensics_plugins"):
         shutil.copytree(root / name, source / name, ignore=shutil.ignore_patterns("__pycache__"))
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "--quiet",
                     "-w", str(tmp_path / "dist"), str(source)], check=True, capture_output=True, timeout=300)
