@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from ..calibration.model import supports
 from ..containment import one_line
 from ..findings import HEADLINE_WORDS, DetectorFinding, Role, Status, Verdict, VerdictLabel
+from ..fusion import LR_DECISION_LOG10, LR_POLICY
 
 HP_SHORT = "content was inserted, moved or removed"
 """Hp in the headline's words; the full proposition is stated under it."""
@@ -158,8 +159,6 @@ def screening(verdict: Verdict, where: bool = True) -> str:
 
     ``where``: a rejection points the reader to page 1's Where figure (not in a batch index, which has none).
     """
-    from ..fusion import LR_DECISION_LOG10, LR_POLICY
-
     label = verdict.label
     if verdict.policy == LR_POLICY:
         threshold = f"{10 ** LR_DECISION_LOG10:g}"
