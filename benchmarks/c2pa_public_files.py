@@ -44,7 +44,7 @@ def main() -> int:
     import c2pa
 
     from forensics_core import load_evidence
-    from forensics_plugins.provenance.detector import analyse
+    from forensics_plugins.provenance.detector import Provenance
     from forensics_plugins.provenance.spec import DEFAULT_PARAMS
 
     wrong = 0
@@ -57,7 +57,7 @@ def main() -> int:
                     state = str(reader.get_validation_state())
             path = Path(tmp) / name
             path.write_bytes(data)
-            finding = analyse(load_evidence(path), DEFAULT_PARAMS)
+            finding = Provenance().analyze(load_evidence(path), DEFAULT_PARAMS)
             bad = state == "Invalid" and "Valid Content Credentials" in finding.summary
             wrong += bad
             print(f"{'WRONG' if bad else '     '} {name:42s} SDK {state:8s} -> {finding.status.value:12s} "

@@ -21,7 +21,7 @@ from harness import OUT, photo_benchmark
 _CHILD = r"""
 import forensics_core
 from forensics_core.evidence import load_evidence
-from forensics_plugins.dq.detector import analyse
+from forensics_plugins.dq.detector import DoubleQuantisation
 from forensics_plugins.dq.spec import DEFAULT_PARAMS
 from forensics_plugins.dq.figures import votes_png
 from forensics_plugins.dq.votes import decode_votes
@@ -30,7 +30,7 @@ t0 = time.perf_counter()
 ev = load_evidence(sys.argv[1])
 luma = ev.luma
 t1 = time.perf_counter()
-result = analyse(ev, DEFAULT_PARAMS)
+result = DoubleQuantisation().analyze(ev, DEFAULT_PARAMS)
 t2 = time.perf_counter()
 votes_png(luma, *decode_votes(result.details["block_votes"]), result.details)
 t3 = time.perf_counter()

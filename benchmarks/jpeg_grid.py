@@ -29,14 +29,14 @@ from harness import OUT, fresh_runs, parse_size, print_stages
 _CHILD = r"""
 import forensics_core
 from forensics_core.evidence import load_evidence
-from forensics_plugins.jpeg_grid.detector import analyse
+from forensics_plugins.jpeg_grid.detector import JpegGrid
 from forensics_plugins.jpeg_grid.spec import DEFAULT_PARAMS
 from forensics_plugins.jpeg_grid.figures import map_png, vote_map_png
 base = hwm_mb()
 t0 = time.perf_counter()
 ev = load_evidence(sys.argv[1])
 t1 = time.perf_counter()
-result = analyse(ev, DEFAULT_PARAMS)
+result = JpegGrid().analyze(ev, DEFAULT_PARAMS)
 t2 = time.perf_counter()
 map_png(ev.pixels, result.details)
 vote_map_png(result.details)

@@ -29,19 +29,22 @@ from harness import OUT, fresh_runs, parse_size, print_stages
 _CHILD = r"""
 from forensics_core import DetectorFinding, Status
 from forensics_core.evidence import load_evidence
-from forensics_plugins.metadata.detector import analyse
+from forensics_plugins.metadata.detector import Metadata
 from forensics_plugins.metadata.spec import DEFAULT_PARAMS, NAME, VERSION
 from forensics_plugins.metadata.section import report_section
 base = hwm_mb()
-lens = DetectorFinding("lens_distortion", "0.1.0", "lens_distortion", Status.OK, "benchmark", None, None, None,
-                       {"global_model": {"k1": 0.1, "k1_stderr": 0.002, "k2": 0.0, "k2_stderr": 0.002}}, {}, 0.0)
+lens = DetectorFinding(name="lens_distortion", version="0.1.0", plugin="lens_distortion", status=Status.OK,
+                       summary="benchmark", score=None, p_value=None, nfa=None,
+                       details={"global_model": {"k1": 0.1, "k1_stderr": 0.002, "k2": 0.0, "k2_stderr": 0.002}},
+                       parameters={}, elapsed_s=0.0)
 t0 = time.perf_counter()
 ev = load_evidence(sys.argv[1])
 t1 = time.perf_counter()
-result = analyse(ev, DEFAULT_PARAMS, {"lens_distortion": lens})
+result = Metadata().analyze(ev, DEFAULT_PARAMS, {"lens_distortion": lens})
 t2 = time.perf_counter()
-finding = DetectorFinding(NAME, VERSION, "metadata", result.status, result.summary, result.score, None, None,
-                          result.details, dict(DEFAULT_PARAMS), t2 - t1)
+finding = DetectorFinding(name=NAME, version=VERSION, plugin="metadata", status=result.status,
+                          summary=result.summary, score=result.score, p_value=None, nfa=None, details=result.details,
+                          parameters=dict(DEFAULT_PARAMS), elapsed_s=t2 - t1)
 section = report_section(finding, ev)
 t3 = time.perf_counter()
 stages = {"decode+hash": t1 - t0, **result.details["elapsed_s"], "detector total": t2 - t1,

@@ -21,7 +21,7 @@ from harness import OUT, photo_benchmark
 _CHILD = r"""
 import forensics_core
 from forensics_core.evidence import load_evidence
-from forensics_plugins.noise.detector import analyse, decode_z
+from forensics_plugins.noise.detector import NoiseLevel, decode_z
 from forensics_plugins.noise.spec import DEFAULT_PARAMS
 from forensics_plugins.noise.figures import z_map_png
 base = hwm_mb()
@@ -29,7 +29,7 @@ t0 = time.perf_counter()
 ev = load_evidence(sys.argv[1])
 luma = ev.luma
 t1 = time.perf_counter()
-result = analyse(ev, DEFAULT_PARAMS)
+result = NoiseLevel().analyze(ev, DEFAULT_PARAMS)
 t2 = time.perf_counter()
 z_map_png(luma, *decode_z(result.details["z_map"]), result.details)
 t3 = time.perf_counter()

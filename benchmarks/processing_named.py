@@ -34,9 +34,14 @@ def _run(job: tuple[str, str]) -> dict[str, object]:
     module, path = job
     from forensics_core.evidence import load_evidence
 
+    from forensics_core import Detector
+
     detector = importlib.import_module(f"{module}.detector")
     spec = importlib.import_module(f"{module}.spec")
-    result = detector.analyse(load_evidence(path), spec.DEFAULT_PARAMS)
+    # Trees before plugin API 2 have a module function; later ones the Detector's method.
+    run = getattr(detector, "analyse", None) or next(
+        v for v in vars(detector).values() if isinstance(v, type) and issubclass(v, Detector) and v is not Detector)().analyze
+    result = run(load_evidence(path), spec.DEFAULT_PARAMS)
     processing = result.details.get("processing") or {}
     return {"status": result.status.value, "nfa": result.nfa, "processing": processing.get("kind")}
 

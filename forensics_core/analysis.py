@@ -165,6 +165,15 @@ class _Job:
     call: Callable[[], Any]
 
 
+def _not_run(spec: DetectorSpec, plugin: str, params: dict[str, Any], status: Status, summary: str, *,
+             details: dict[str, Any] | None = None, error: str | None = None, elapsed_s: float = 0.0,
+             output: str | None = None) -> DetectorFinding:
+    """The finding of a detector that gave no result: skipped, unavailable or failed."""
+    return DetectorFinding(name=spec.name, version=spec.version, plugin=plugin, status=status, summary=summary,
+                           score=None, p_value=None, nfa=None, details=details or {}, parameters=params,
+                           elapsed_s=elapsed_s, error=error, output=output)
+
+
 def _job(host: PluginHost, name: str, evidence: Evidence, params: dict[str, Any],
          prior: Mapping[str, DetectorFinding] | None) -> _Job | DetectorFinding:
     """The detector's job, or its finding when it cannot or need not run (not installed, another format)."""
@@ -173,25 +182,21 @@ def _job(host: PluginHost, name: str, evidence: Evidence, params: dict[str, Any]
         available = ", ".join(sorted(host.detectors)) or "none"
         failed = [r.name for r in host.plugin_records() if r.status == "error"]
         hint = f"; plugins that failed to load: {', '.join(failed)}" if failed else ""
-        return DetectorFinding(name, "unknown", "unknown", Status.ERROR, "The detector is not available.",
-                               None, None, None, {}, params, 0.0,
-                               error=f"no loaded plugin provides detector {name!r} (available: {available}){hint}")
-    spec, plugin = registered.spec, registered.plugin
+        return _not_run(DetectorSpec(name, "unknown", ""), "unknown", params, Status.ERROR,
+                        "The detector is not available.",
+                        error=f"no loaded plugin provides detector {name!r} (available: {available}){hint}")
+    spec, plugin, detector = registered.spec, registered.plugin, registered.detector
     fmt = evidence.info.format
     if spec.formats and fmt not in spec.formats:
-        return DetectorFinding(
-            spec.name, spec.version, plugin, Status.SKIPPED,
-            f"Not applied to a {fmt} file: the detector applies to {', '.join(spec.formats)} files, the formats its "
-            f"null model was checked on.", None, None, None, {"formats": list(spec.formats)}, params, 0.0)
-    analyze_impl = host.implementation("forensics_analyze", plugin)
-    if analyze_impl is None:
-        return DetectorFinding(spec.name, spec.version, plugin, Status.ERROR, "The detector failed; see error.",
-                               None, None, None, {}, params, 0.0,
-                               error=f"plugin {plugin!r} registers {name!r} but implements no forensics_analyze")
+        return _not_run(spec, plugin, params, Status.SKIPPED,
+                        f"Not applied to a {fmt} file: the detector applies to {', '.join(spec.formats)} files, the "
+                        f"formats its null model was checked on.", details={"formats": list(spec.formats)})
     seen = {n: f for n, f in (prior or {}).items() if n in spec.uses}
 
     def call() -> Any:
-        return analyze_impl(detector=name, evidence=evidence, params=dict(params), prior=seen)
+        if registered.reads_prior:
+            return detector.analyze(evidence, dict(params), prior=seen)
+        return detector.analyze(evidence, dict(params))
 
     return _Job(spec, plugin, params, call)
 
@@ -201,8 +206,8 @@ def _finding(job: _Job, outcome: tuple, printed: str | None, elapsed_s: float) -
     spec, elapsed = job.spec, round(elapsed_s, 3)
 
     def failed(reason: str, details: dict[str, Any] | None = None) -> DetectorFinding:
-        return DetectorFinding(spec.name, spec.version, job.plugin, Status.ERROR, "The detector failed; see error.",
-                               None, None, None, details or {}, job.params, elapsed, error=reason, output=printed)
+        return _not_run(spec, job.plugin, job.params, Status.ERROR, "The detector failed; see error.",
+                        details=details, error=reason, elapsed_s=elapsed, output=printed)
 
     if outcome[0] == "error":
         return failed(outcome[1], {"traceback": outcome[2]} if outcome[2] else None)
@@ -210,8 +215,9 @@ def _finding(job: _Job, outcome: tuple, printed: str | None, elapsed_s: float) -
         result: DetectorResult = check_result(outcome[1])
     except MalformedResult as exc:
         return failed(f"malformed result: {exc}")
-    return DetectorFinding(spec.name, spec.version, job.plugin, result.status, result.summary, result.score,
-                           result.p_value, result.nfa, result.details, job.params, elapsed, output=printed,
+    return DetectorFinding(name=spec.name, version=spec.version, plugin=job.plugin, status=result.status,
+                           summary=result.summary, score=result.score, p_value=result.p_value, nfa=result.nfa,
+                           details=result.details, parameters=job.params, elapsed_s=elapsed, output=printed,
                            headline=result.headline)
 
 
@@ -231,7 +237,6 @@ def run_detector(
     job = _job(host, name, evidence, params, prior)
     if isinstance(job, DetectorFinding):
         return job
-    host.prepare([job.plugin])
     started = time.perf_counter()
     printed: str | None = None
     if options.isolation == "process" and can_fork():
@@ -280,13 +285,8 @@ def run_detectors(host: PluginHost, order: Sequence[str], evidence: Evidence, pa
             if isinstance(job, DetectorFinding):
                 done[name] = job
             else:
-                host.prepare([job.plugin])
                 running[Child(job.call, options.timeout_s)] = (name, job)
         if running:
-            # The next detector's imports, while the running ones compute.
-            upcoming = next((host.detectors[n].plugin for n in pending if n in host.detectors), None)
-            if upcoming is not None:
-                host.prepare([upcoming])
             for child in wait_any(list(running)):
                 name, job = running.pop(child)
                 outcome, printed = child.collect()
@@ -296,7 +296,7 @@ def run_detectors(host: PluginHost, order: Sequence[str], evidence: Evidence, pa
 
 def _extra_metadata(host: PluginHost, evidence: Evidence, contained_s: float | None) -> dict[str, Any]:
     extra: dict[str, Any] = {}
-    for outcome in host.call_each("forensics_extract_metadata", contained_s=contained_s, evidence=evidence):
+    for outcome in host.each("forensics_extract_metadata", contained_s=contained_s, evidence=evidence):
         if outcome.error is not None:
             extra[outcome.plugin] = {"error": one_line(outcome.error)}
         elif outcome.value is not None:
@@ -308,19 +308,19 @@ def _extra_metadata(host: PluginHost, evidence: Evidence, contained_s: float | N
 
 
 def fuse(host: PluginHost, policy: str, findings: Sequence[DetectorFinding], evidence: Evidence) -> Verdict:
-    """The verdict of the first plugin that implements ``policy`` (the hook is ``firstresult``).
+    """The verdict of ``forensics_fuse``, called through pluggy: the first plugin to implement ``policy`` decides.
 
-    Each implementation is called on its own: one that raises is passed over,
-    since it may not implement ``policy`` at all and must not spoil the
-    verdict of the plugin that does. Only when no plugin gives a verdict are
-    the failures stated, as the reason the verdict is inconclusive.
+    An implementation that raises is left out of the call (it may not
+    implement ``policy`` at all, and must not spoil the verdict of the
+    plugin that does). Only when no plugin gives a verdict are the failures
+    stated, as the reason the verdict is inconclusive.
     """
-    failures = []
-    for outcome in host.call_each("forensics_fuse", policy=policy, findings=findings, evidence=evidence):
-        if outcome.error is not None:
-            failures.append(f"plugin {outcome.plugin!r} failed: {one_line(outcome.error)}")
-        elif isinstance(outcome.value, Verdict):
-            return outcome.value
+    call = host.call("forensics_fuse", policy=policy, findings=findings, evidence=evidence)
+    if isinstance(call.value, Verdict):
+        return call.value
+    failures = [f"plugin {f.plugin!r} failed: {one_line(f.error)}" for f in call.failures]
+    if call.value is not None:
+        failures.append(f"the first answer was a {type(call.value).__name__}, not a Verdict")
     if failures:
         return Verdict(VerdictLabel.INCONCLUSIVE, None,
                        f"No verdict by fusion policy {policy!r}: " + "; ".join(failures) + ".", policy)

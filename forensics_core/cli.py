@@ -128,9 +128,8 @@ class ForensicsGroup(click.Group):
     def host(self) -> PluginHost:
         if self._host is None:
             self._host = PluginHost.from_entry_points()
-            for outcome in self._host.call_each("forensics_register_commands", cli=self):
-                if outcome.error is not None:
-                    _fail_line(f"plugin {outcome.plugin}", f"could not add its commands: {one_line(outcome.error)}")
+            for failure in self._host.call("forensics_register_commands", cli=self).failures:
+                _fail_line(f"plugin {failure.plugin}", f"could not add its commands: {one_line(failure.error)}")
         return self._host
 
     def list_commands(self, ctx):

@@ -1,7 +1,7 @@
 """What one detector's findings publish for another detector to read.
 
 A detector that declares ``uses=("other",)`` receives the other detector's
-finding in ``prior`` (see ``forensics_analyze``). What it may read from that
+finding in ``prior`` (see :meth:`forensics_core.Detector.analyze`). What it may read from that
 finding's ``details`` is fixed here, as a typed record with one reader, so
 that a change on the publishing side is a change of this contract, not a
 silent break of the reading side.
@@ -55,7 +55,7 @@ class RadialDistortion:
     --------
     A detector that ``uses=("lens_distortion",)`` reads it from ``prior``:
 
-    >>> def forensics_analyze(detector, evidence, params, prior):
+    >>> def analyze(self, evidence, params, prior):
     ...     lens = RadialDistortion.from_finding(prior.get("lens_distortion"))
     ...     if lens is None:
     ...         ...  # say what could not be compared

@@ -64,7 +64,7 @@ class DetectorSpec:
         any of them, and the merged set is recorded with the finding.
     uses : tuple of str
         Other detectors whose findings this one reads (``prior`` in
-        ``forensics_analyze``). When both are selected, those run first; when
+        ``Detector.analyze``). When both are selected, those run first; when
         one is absent or fails, this detector still runs and must say what
         it could not compare.
     formats : tuple of str
@@ -103,7 +103,7 @@ HEADLINE_WORDS = 25
 
 @dataclass
 class DetectorResult:
-    """What a plugin's ``forensics_analyze`` returns for one photo.
+    """What a detector's ``analyze`` returns for one photo.
 
     Parameters
     ----------
@@ -139,9 +139,9 @@ class DetectorResult:
     headline: str | None = None
 
 
-@dataclass
+@dataclass(kw_only=True)
 class DetectorFinding:
-    """One detector's entry in ``findings.json``: its result plus provenance.
+    """One detector's entry in ``findings.json``: its result plus provenance (built by keyword).
 
     ``output`` keeps what the detector's process printed (its stdout and
     stderr, libraries' warnings included), cut at 4,000 characters, instead

@@ -1,10 +1,13 @@
 """Plugin loading and hook calls with failure containment.
 
 pluggy's own ``load_setuptools_entrypoints`` stops at the first plugin whose
-import fails, and a hook call stops at the first implementation that raises,
-discarding the others' results. Here each entry point is loaded on its own and
-each implementation is called on its own, so one broken plugin is recorded as
-failed and the rest carry on.
+import fails, and a hook call stops at the first implementation that raises.
+Here each entry point is loaded on its own, and a hook call that raises is
+made again without the plugin whose implementation raised (found in the
+traceback), so one broken plugin is recorded as failed and the rest carry on.
+
+Detectors are the objects plugins register (:class:`~forensics_core.Detector`);
+the core keeps them in :attr:`PluginHost.detectors` and calls their methods.
 """
 
 from __future__ import annotations
@@ -12,8 +15,9 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib.metadata import EntryPoint, entry_points
+from types import TracebackType
 from typing import Any
 
 import numpy as np
@@ -21,18 +25,25 @@ import pluggy
 
 from . import ENTRY_POINT_GROUP, hookspecs
 from .containment import PluginFault, can_fork, one_line, run_forked
+from .detector import Detector, reads_prior
 from .findings import DetectorFinding, DetectorSpec, PluginRecord, Status
 
 ALLOW_ENV = "FORENSICS_PLUGINS"
 DENY_ENV = "FORENSICS_DISABLE_PLUGINS"
 
 _DETECTOR_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+_REGISTER = "forensics_register_detectors"
+_API_2 = "see the README, Writing a plugin"
 
 
 @dataclass(frozen=True)
 class RegisteredDetector:
+    """A detector object as registered: its spec, the plugin that registered it, and the object."""
+
     spec: DetectorSpec
     plugin: str
+    detector: Detector
+    reads_prior: bool = False
 
 
 @dataclass(frozen=True)
@@ -44,6 +55,14 @@ class HookOutcome:
     error: BaseException | None = None
 
 
+@dataclass(frozen=True)
+class HookCall:
+    """The result of a hook called through pluggy, and the implementations left out because they raised."""
+
+    value: Any
+    failures: list[HookOutcome] = field(default_factory=list)
+
+
 def _env_names(var: str) -> set[str] | None:
     raw = os.environ.get(var)
     if raw is None or not raw.strip():
@@ -52,7 +71,11 @@ def _env_names(var: str) -> set[str] | None:
 
 
 class PluginHost:
-    """The loaded plugins, how each one loaded, and the detectors they provide.
+    """The loaded plugins, how each one loaded, and the detectors they registered.
+
+    A plugin's ``forensics_register_detectors`` is called the first time
+    :attr:`detectors` or :attr:`records` is read, so that commands which
+    need no detector (``--help``) import no plugin's numerical code.
 
     Parameters
     ----------
@@ -65,11 +88,11 @@ class PluginHost:
     def __init__(self, allow: Iterable[str] | None = None, deny: Iterable[str] | None = None):
         self.pm = pluggy.PluginManager(hookspecs.PROJECT)
         self.pm.add_hookspecs(hookspecs)
-        self.records: dict[str, PluginRecord] = {}
-        self.detectors: dict[str, RegisteredDetector] = {}
+        self._records: dict[str, PluginRecord] = {}
+        self._detectors: dict[str, RegisteredDetector] = {}
+        self._unregistered: list[str] = []
         self.allow = set(allow) if allow is not None else _env_names(ALLOW_ENV)
         self.deny = set(deny) if deny is not None else (_env_names(DENY_ENV) or set())
-        self._prepared: tuple[int, set[str]] = (0, set())
         from . import fusion
 
         self.add(fusion, "core.fusion", distribution="forensics", version=_core_version())
@@ -87,6 +110,18 @@ class PluginHost:
             host.load_entry_point(ep)
         return host
 
+    @property
+    def detectors(self) -> dict[str, RegisteredDetector]:
+        """Every registered detector by name (registering the loaded plugins' detectors first)."""
+        self._register_pending()
+        return self._detectors
+
+    @property
+    def records(self) -> dict[str, PluginRecord]:
+        """How each plugin loaded, by plugin name (its detectors registered first)."""
+        self._register_pending()
+        return self._records
+
     def _enabled(self, name: str) -> bool:
         return name not in self.deny and (self.allow is None or name in self.allow)
 
@@ -96,7 +131,7 @@ class PluginHost:
         dist_version = dist.version if dist is not None else None
         if not self._enabled(ep.name):
             return self._record(PluginRecord(ep.name, dist_name, dist_version, "disabled"))
-        if ep.name in self.records:
+        if ep.name in self._records:
             return self._record(
                 PluginRecord(ep.name + f" ({dist_name})", dist_name, dist_version, "error",
                              error=f"plugin name {ep.name!r} is already taken by another distribution")
@@ -108,7 +143,7 @@ class PluginHost:
         return self.add(obj, ep.name, distribution=dist_name, version=dist_version)
 
     def add(self, plugin: object, name: str, distribution: str | None = None, version: str | None = None) -> PluginRecord:
-        """Register one plugin object, validate it and collect its detectors.
+        """Register one plugin object's hooks and check them; its detectors are registered when first needed.
 
         Any failure leaves the plugin unregistered and recorded with status
         ``error``; it never raises.
@@ -120,112 +155,154 @@ class PluginHost:
         except Exception as exc:
             return self._record(PluginRecord(name, distribution, version, "error", error=f"invalid hooks: {one_line(exc)}"))
         record = PluginRecord(name, distribution, version, "loaded", hooks=self._hook_names(plugin))
+        replaced = [h for h in record.hooks if h in hookspecs.REPLACED_HOOKS]
+        if replaced:
+            return self._fail(name, record, "written for plugin API 1: " + "; ".join(
+                f"{h} is now {hookspecs.REPLACED_HOOKS[h]}" for h in replaced)
+                + f" of a Detector registered by forensics_register_detectors(register) ({_API_2})")
         unknown = [h for h in record.hooks if getattr(self.pm.hook, h).spec is None]
         if unknown:
-            return self._fail(plugin, record, f"implements unknown hook(s) {', '.join(unknown)}")
-        specs: list[DetectorSpec] = []
-        for outcome in self.call_each("forensics_register_detectors", plugins=[name]):
-            if outcome.error is not None:
-                return self._fail(plugin, record, f"forensics_register_detectors raised {one_line(outcome.error)}")
-            try:
-                specs = self._check_specs(outcome.value)
-            except ValueError as exc:
-                return self._fail(plugin, record, str(exc))
-        for spec in specs:
-            self.detectors[spec.name] = RegisteredDetector(spec, name)
-        record.detectors = [s.name for s in specs]
+            return self._fail(name, record, f"implements unknown hook(s) {', '.join(unknown)}")
+        if _REGISTER in record.hooks:
+            self._unregistered.append(name)
         return self._record(record)
 
-    def _check_specs(self, value: Any) -> list[DetectorSpec]:
-        if value is None:
-            return []
-        if not isinstance(value, (list, tuple)) or not all(isinstance(s, DetectorSpec) for s in value):
-            raise ValueError("forensics_register_detectors must return a list of DetectorSpec")
-        for spec in value:
+    def _register_pending(self) -> None:
+        while self._unregistered:
+            self._register(self._unregistered.pop(0))
+
+    def _register(self, name: str) -> None:
+        """Call ``name``'s ``forensics_register_detectors`` and keep its detectors, all or none."""
+        record = self._records[name]
+        found: list[Any] = []
+        try:
+            returned = self._only(name, _REGISTER)(register=found.append)
+        except Exception as exc:
+            self._fail(name, record, f"{_REGISTER} raised {one_line(exc)}")
+            return
+        try:
+            if any(r is not None for r in returned):
+                raise ValueError(f"{_REGISTER} returned a value: plugin API 2 registers Detector objects by calling "
+                                 f"register(detector) for each instead ({_API_2})")
+            taken = self._checked(found)
+        except ValueError as exc:
+            self._fail(name, record, str(exc))
+            return
+        for detector in taken:
+            self._detectors[detector.spec.name] = RegisteredDetector(detector.spec, name, detector, reads_prior(detector))
+        record.detectors = [d.spec.name for d in taken]
+
+    def _checked(self, found: list[Any]) -> list[Detector]:
+        names: set[str] = set()
+        for detector in found:
+            if not isinstance(detector, Detector):
+                raise ValueError(f"register() takes a forensics_core.Detector, not {type(detector).__name__}")
+            spec = getattr(detector, "spec", None)
+            if not isinstance(spec, DetectorSpec):
+                raise ValueError(f"{type(detector).__name__}.spec must be a DetectorSpec")
             if not _DETECTOR_NAME.match(spec.name):
                 raise ValueError(f"detector name {spec.name!r} must match {_DETECTOR_NAME.pattern}")
-            if spec.name in self.detectors:
-                raise ValueError(f"detector {spec.name!r} is already provided by plugin {self.detectors[spec.name].plugin!r}")
+            if spec.name in self._detectors or spec.name in names:
+                owner = self._detectors[spec.name].plugin if spec.name in self._detectors else "this plugin"
+                raise ValueError(f"detector {spec.name!r} is already provided by plugin {owner!r}")
             if not isinstance(spec.version, str) or not spec.version:
                 raise ValueError(f"detector {spec.name!r} has no version")
             if isinstance(spec.uses, str) or not all(isinstance(u, str) for u in spec.uses):
                 raise ValueError(f"detector {spec.name!r}: uses must be a tuple of detector names")
-        return list(value)
+            names.add(spec.name)
+        return found
 
-    def _fail(self, plugin: object, record: PluginRecord, reason: str) -> PluginRecord:
-        self.pm.unregister(plugin)
+    def _fail(self, name: str, record: PluginRecord, reason: str) -> PluginRecord:
+        plugin = self.pm.get_plugin(name)
+        if plugin is not None:
+            self.pm.unregister(plugin)
         record.status, record.error, record.detectors = "error", reason, []
         return self._record(record)
 
     def _record(self, record: PluginRecord) -> PluginRecord:
-        self.records[record.name] = record
+        self._records[record.name] = record
         return record
 
     def _hook_names(self, plugin: object) -> list[str]:
         return sorted(h.name for h in self.pm.get_hookcallers(plugin) or [])
 
-    def call_each(self, hook_name: str, plugins: Iterable[str] | None = None, *, contained_s: float | None = None,
-                  **kwargs: Any) -> Iterator[HookOutcome]:
-        """Call each plugin's implementation of ``hook_name`` on its own.
+    def _only(self, name: str, hook_name: str):
+        """pluggy's caller of ``hook_name`` restricted to plugin ``name``."""
+        others = [p for n, p in self.pm.list_name_plugin() if n != name]
+        return self.pm.subset_hook_caller(hook_name, remove_plugins=others)
 
-        Implementations are visited in pluggy's calling order (last registered
-        first). An implementation that raises yields a :class:`HookOutcome`
-        with the exception; the others still run. Hook wrappers are not called:
-        every forensics hook is a plain call. With ``contained_s``, each call
-        runs in a forked child (where the platform can fork) stopped after that
-        many seconds, so a hang, an ``os._exit`` or a crash costs only that
-        plugin's outcome; the value comes back pickled.
+    def call(self, hook_name: str, **kwargs: Any) -> HookCall:
+        """Call ``hook_name`` through pluggy (``pm.hook``), leaving out each implementation that raises.
+
+        pluggy's calling order and ``firstresult`` hold. When an
+        implementation raises, the call is made again without that plugin,
+        and the exception is kept in :attr:`HookCall.failures`; an
+        implementation that ran before the raising one runs again.
         """
-        wanted = set(plugins) if plugins is not None else None
-        hook = getattr(self.pm.hook, hook_name)
-        for impl in reversed(hook.get_hookimpls()):
-            if impl.hookwrapper or getattr(impl, "wrapper", False):
-                continue
-            if wanted is not None and impl.plugin_name not in wanted:
-                continue
-            args = [kwargs[arg] for arg in impl.argnames]
+        failures: list[HookOutcome] = []
+        left_out: list[object] = []
+        while True:
+            caller = (self.pm.subset_hook_caller(hook_name, remove_plugins=left_out) if left_out
+                      else getattr(self.pm.hook, hook_name))
+            try:
+                return HookCall(caller(**kwargs), failures)
+            except Exception as exc:
+                culprit = _raised_in(caller.get_hookimpls(), exc.__traceback__)
+                failures.append(HookOutcome(culprit.plugin_name if culprit else "unknown", error=exc))
+                if culprit is None:
+                    return HookCall(None, failures)
+                left_out.append(culprit.plugin)
+
+    def each(self, hook_name: str, *, contained_s: float | None = None, **kwargs: Any) -> Iterator[HookOutcome]:
+        """Call each plugin's implementation of ``hook_name`` through pluggy on its own, for answers kept by plugin.
+
+        Plugins are visited in pluggy's calling order (last registered
+        first). An implementation that raises yields a :class:`HookOutcome`
+        with the exception; the others still run. With ``contained_s``, each
+        call runs in a forked child (where the platform can fork) stopped
+        after that many seconds, so a hang, an ``os._exit`` or a crash costs
+        only that plugin's outcome; the value comes back pickled.
+        """
+        for impl in reversed(getattr(self.pm.hook, hook_name).get_hookimpls()):
+            caller = self._only(impl.plugin_name, hook_name)
+
+            def first(caller=caller) -> Any:
+                return next(iter(caller(**kwargs)), None)
+
             if contained_s is not None and can_fork():
-                outcome, _ = run_forked(lambda: impl.function(*args), contained_s)
+                outcome, _ = run_forked(first, contained_s)
                 if outcome[0] == "error":
                     yield HookOutcome(impl.plugin_name, error=PluginFault(outcome[1]))
                 else:
                     yield HookOutcome(impl.plugin_name, value=outcome[1])
                 continue
             try:
-                value = impl.function(*args)
+                value = first()
             except Exception as exc:
                 yield HookOutcome(impl.plugin_name, error=exc)
             else:
                 yield HookOutcome(impl.plugin_name, value=value)
 
-    def prepare(self, plugins: Iterable[str] | None = None) -> None:
-        """Call the ``forensics_prepare`` of each plugin named (all by default) once for this host in this process.
-
-        See the hook's documentation. The runner prepares a plugin just
-        before its first detector starts, so that one plugin's imports
-        overlap the detectors already running instead of delaying them all.
-        """
-        pid, done = self._prepared
-        if pid != os.getpid():
-            done = set()
-            self._prepared = (os.getpid(), done)
-        implemented = [impl.plugin_name for impl in self.pm.hook.forensics_prepare.get_hookimpls()]
-        todo = [name for name in implemented if name not in done and (plugins is None or name in plugins)]
-        if not todo:
-            return
-        done.update(todo)
-        for _ in self.call_each("forensics_prepare", todo):
-            pass
-
-    def implementation(self, hook_name: str, plugin: str):
-        """The function with which ``plugin`` implements ``hook_name``, or None."""
-        for impl in getattr(self.pm.hook, hook_name).get_hookimpls():
-            if impl.plugin_name == plugin:
-                return lambda **kw: impl.function(*(kw[a] for a in impl.argnames))
-        return None
+    def registered(self, finding: DetectorFinding) -> RegisteredDetector | None:
+        """The detector object that made ``finding``, if the plugin that registered it is loaded here."""
+        entry = self.detectors.get(finding.name)
+        return entry if entry is not None and entry.plugin == finding.plugin else None
 
     def plugin_records(self) -> list[PluginRecord]:
         return [self.records[n] for n in sorted(self.records)]
+
+
+def _raised_in(impls: list[pluggy.HookImpl], tb: TracebackType | None) -> pluggy.HookImpl | None:
+    """The implementation among ``impls`` in whose frame the traceback ``tb`` passes first."""
+    while tb is not None:
+        frame = tb.tb_frame
+        hits = [i for i in impls if getattr(i.function, "__code__", None) is frame.f_code]
+        if len(hits) > 1:
+            hits = [i for i in hits if getattr(i.function, "__self__", None) is frame.f_locals.get("self")]
+        if hits:
+            return hits[0]
+        tb = tb.tb_next
+    return None
 
 
 def _core_version() -> str:
@@ -235,15 +312,15 @@ def _core_version() -> str:
 
 
 def localise_map(host: PluginHost, finding: DetectorFinding, shape: tuple[int, int]) -> np.ndarray | None:
-    """The boolean ``shape`` map of the pixels ``finding`` flags, from its plugin's ``forensics_localize``.
+    """The boolean ``shape`` map of the pixels ``finding`` flags, from its detector's ``localize``.
 
-    None when the plugin does not localise, fails, or answers with another shape.
+    None when the detector does not localise, fails, or answers with another shape.
     """
-    impl = host.implementation("forensics_localize", finding.plugin)
-    if impl is None or finding.status is Status.ERROR:
+    entry = host.registered(finding)
+    if entry is None or finding.status is Status.ERROR:
         return None
     try:
-        pred = impl(finding=finding, shape=shape)
+        pred = entry.detector.localize(finding, shape)
     except Exception:
         return None
     if pred is None:

@@ -1,9 +1,9 @@
 """Synthetic test photos that plugins contribute for validation.
 
-A plugin that knows how to forge its own trace (a pasted region with another
+A detector that knows how to forge its own trace (a pasted region with another
 lens, JPEG grid or CFA phase) returns :class:`SyntheticCase` objects from
-``forensics_synthetic_cases``; ``forensics validate synthetic`` runs every
-installed detector on every plugin's cases, so each detector is also measured
+its ``synthetic_cases``; ``forensics validate synthetic`` runs every
+installed detector on every detector's cases, so each detector is also measured
 on the others' forgeries and authentic photos.
 """
 
@@ -24,7 +24,7 @@ class SyntheticCase:
     Parameters
     ----------
     name : str
-        Unique among the plugin's cases for one seed, ``[a-z0-9_-]+``; used as a
+        Unique among the detector's cases for one seed, ``[a-z0-9_-]+``; used as a
         file stem.
     data : bytes
         The encoded file exactly as it is to be examined.

@@ -166,7 +166,7 @@ def where_figure(pixels: np.ndarray, masks: list[tuple[int, np.ndarray]], max_si
         The stored grid (``evidence.pixels``).
     masks : list of (int, ndarray of bool, shape (H, W))
         Each flagging detector's index into :data:`WHERE_COLOURS` and its map
-        (``forensics_localize``) at the stored size.
+        (its ``localize``) at the stored size.
     max_side : int
         Longest side of the figure, pixels.
 

@@ -1,11 +1,11 @@
 """Detector sections: what each plugin contributes, rendered generically and contained.
 
-Each plugin's ``forensics_report_section`` is called on its own, in a forked
+Each detector's ``report_section`` is called on its own, in a forked
 child as detectors are, and what it returns is rendered there: its figures
 decoded and reduced for the page, its tables turned into CSV files, its
 template filled in a sandboxed, autoescaping Jinja2 environment (a template
 cannot reach Python internals, and every value from ``context`` is escaped
-unless the plugin's own template text put the markup there). A plugin whose hook raises, returns something
+unless the plugin's own template text put the markup there). A detector whose ``report_section`` raises, returns something
 other than a :class:`ReportSection`, or whose template fails, gets a section
 that says so, followed by its finding in generic form; the report still renders.
 """
@@ -27,6 +27,7 @@ from markupsafe import Markup
 from PIL import Image
 
 from ..containment import Child, PluginFault, can_fork, jobs_for, wait_any
+from ..detector import Detector, implements
 from ..evidence import Evidence
 from ..findings import DetectorFinding
 from ..plugins import PluginHost, one_line
@@ -250,9 +251,9 @@ SECTION_TIMEOUT_S = 300.0
 
 
 def _from_outcome(finding: DetectorFinding, error: BaseException | None, value: object) -> DetectorSection | None:
-    """The section a hook's outcome gives, or None when the hook declined (returned None)."""
+    """The section a ``report_section`` call's outcome gives, or None when it declined (returned None)."""
     if error is not None:
-        return _failed(finding, f"its report hook raised {one_line(error)}")
+        return _failed(finding, f"its report_section raised {one_line(error)}")
     if value is None:
         return None
     try:
@@ -261,15 +262,15 @@ def _from_outcome(finding: DetectorFinding, error: BaseException | None, value: 
         return _failed(finding, f"its section could not be rendered: {one_line(exc)}")
 
 
-def _rendered(impl: Callable[..., object], finding: DetectorFinding, evidence: Evidence) -> DetectorSection | None:
-    """Call a plugin's section hook and render what it returns; None when it declined.
+def _rendered(detector: Detector, finding: DetectorFinding, evidence: Evidence) -> DetectorSection | None:
+    """Call a detector's ``report_section`` and render what it returns; None when it declined.
 
-    Runs where the hook runs, in its contained child, so that decoding the
+    Runs where the method runs, in its contained child, so that decoding the
     plugin's figures and filling its template are contained too: a figure
     that crashes its decoder or hangs costs only that section.
     """
     try:
-        value = impl(finding=finding, evidence=evidence)
+        value = detector.report_section(finding, evidence)
     except Exception as exc:
         return _from_outcome(finding, exc, None)
     return _from_outcome(finding, None, value)
@@ -281,7 +282,7 @@ def section_for(host: PluginHost | None, finding: DetectorFinding, evidence: Evi
 
     Never raises: whatever the plugin does wrong (raising, hanging past
     ``timeout_s``, at most :data:`SECTION_TIMEOUT_S`, ending its process)
-    becomes the section's ``failure``; the hook runs in a child process, as
+    becomes the section's ``failure``; the method runs in a child process, as
     detectors do.
     """
     return sections_for(host, [finding], evidence, timeout_s, jobs=1)[0]
@@ -289,25 +290,24 @@ def section_for(host: PluginHost | None, finding: DetectorFinding, evidence: Evi
 
 def sections_for(host: PluginHost | None, findings: Sequence[DetectorFinding], evidence: Evidence,
                  timeout_s: float | None = None, jobs: int = 1) -> list[DetectorSection]:
-    """The sections of ``findings``, in their order, with ``jobs`` section hooks running at once.
+    """The sections of ``findings``, in their order, with ``jobs`` ``report_section`` calls running at once.
 
-    Each hook runs contained as in :func:`section_for`, which this is with
+    Each call runs contained as in :func:`section_for`, which this is with
     ``jobs=1``, on large photos or where the platform cannot fork
-    (:func:`~forensics_core.containment.jobs_for`; without fork the hooks
+    (:func:`~forensics_core.containment.jobs_for`; without fork the calls
     run in this process); the sections are the same whatever ``jobs`` is.
     """
     jobs = jobs_for(evidence.info.width * evidence.info.height, jobs)
     out: dict[int, DetectorSection] = {}
     pending: list[tuple[int, Callable[[], DetectorSection | None]]] = []
     for i, finding in enumerate(findings):
-        impl = (host.implementation("forensics_report_section", finding.plugin)
-                if host is not None and finding.plugin in host.records else None)
-        if impl is None:
+        entry = host.registered(finding) if host is not None else None
+        if entry is None or not implements(entry.detector, "report_section"):
             out[i] = DetectorSection(finding, finding.name)
         elif can_fork():
-            pending.append((i, partial(_rendered, impl, finding, evidence)))
+            pending.append((i, partial(_rendered, entry.detector, finding, evidence)))
         else:
-            out[i] = _rendered(impl, finding, evidence) or DetectorSection(finding, finding.name)
+            out[i] = _rendered(entry.detector, finding, evidence) or DetectorSection(finding, finding.name)
     running: dict[Child, int] = {}
     while pending or running:
         while pending and len(running) < jobs:

@@ -236,7 +236,7 @@ def _shell_quote(text: str) -> str:
 def _where(findings: Findings, evidence: Evidence, host: PluginHost | None) -> dict[str, Any]:
     """Page 1's picture: the photo with the flagged pixels of every detector that found something outlined.
 
-    The maps come from each plugin's ``forensics_localize``, the same maps
+    The maps come from each detector's ``localize``, the same maps
     ``forensics validate`` scores against true masks, for the detectors
     :func:`.wording.found_something` names; a detector colours its outline
     by its row's position, so that page 1's table is the legend.

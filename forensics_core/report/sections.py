@@ -1,4 +1,4 @@
-"""What a plugin contributes to the report through ``forensics_report_section``."""
+"""What a detector contributes to the report through its ``report_section``."""
 
 from __future__ import annotations
 

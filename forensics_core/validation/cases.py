@@ -1,7 +1,7 @@
 """The photos of a validation suite and their truth.
 
-A suite is either ``synthetic`` (every installed plugin's
-``forensics_synthetic_cases``, generated on the fly from a seed) or a folder
+A suite is either ``synthetic`` (every installed detector's
+``synthetic_cases``, generated on the fly from a seed) or a folder
 holding a truth file or the common authentic/tampered layout.
 
 Truth file: ``truth.csv`` in the folder, UTF-8, with a header row::

@@ -24,7 +24,7 @@ console = Console(stderr=True, highlight=False, emoji=False)
 @click.option("--seed", type=int, default=DEFAULT_SEED, show_default=True,
               help="Seed of the synthetic, lens-splices and innocent-processing suites.")
 @click.option("--count", type=click.IntRange(min=1), default=DEFAULT_COUNT, show_default=True,
-              help="Authentic and spliced photos per plugin in the synthetic suite.")
+              help="Authentic and spliced photos per detector in the synthetic suite.")
 @click.option("--corpus", type=click.Path(file_okay=False, path_type=Path), default=DEFAULT_REAL_CORPUS,
               show_default=True,
               help="Real corpus the lens-splices and innocent-processing suites are built from (only read).")
@@ -32,10 +32,10 @@ console = Console(stderr=True, highlight=False, emoji=False)
               help="Time limit per detector and photo, seconds.")
 @click.option("--fusion", default="bonferroni", show_default=True, help="Fusion policy for the verdict.")
 @click.pass_context
-def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, corpus, timeout, fusion):
+def validate_command(ctx, *, suites, out_dir, detectors, workers, seed, count, corpus, timeout, fusion):
     """Run the detectors over SUITES and write their known error rates in one record.
 
-    SUITES is `synthetic` (every plugin's synthetic photos, generated from
+    SUITES is `synthetic` (every detector's synthetic photos, generated from
     --seed; nothing is downloaded), `lens-splices` (the lens-distortion
     paper's three kinds of splice and controls, forged from the real
     authentic building photos of --corpus with --seed into OUT/cases/),
@@ -73,10 +73,10 @@ def validate_command(ctx, suites, out_dir, detectors, workers, seed, count, corp
                                  "other suites", param_hint="SUITES")
     try:
         if synthetic:
-            with console.status(f"generating the synthetic suite (seed {seed}, {count} + {count} per plugin)"):
+            with console.status(f"generating the synthetic suite (seed {seed}, {count} + {count} per detector)"):
                 the_suite = synthetic_suite(
                     host, out_dir / "cases", seed, count,
-                    on_problem=lambda p: console.print(f"forensics: warning: plugin {p.plugin} could not generate "
+                    on_problem=lambda p: console.print(f"forensics: warning: detector {p.detector} could not generate "
                                                        f"synthetic cases: {p.reason}", markup=False))
         elif built:
             with console.status(f"building the {suites[0]} suite from {corpus} (seed {seed})"):

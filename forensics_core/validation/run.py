@@ -11,6 +11,7 @@ from pathlib import Path
 
 from .. import __version__
 from ..analysis import Options, environment
+from ..detector import implements
 from ..fusion import ALPHA
 from ..atomic import write_atomic
 from ..plugins import PluginHost, one_line
@@ -29,31 +30,30 @@ THUMBNAILS = "thumbnails"
 
 @dataclass(frozen=True)
 class SyntheticProblem:
-    """A plugin whose synthetic cases could not be generated."""
+    """A detector whose synthetic cases could not be generated."""
 
-    plugin: str
+    detector: str
     reason: str
 
 
 def synthetic_suite(host: PluginHost, folder: Path, seed: int, count: int,
                     on_problem: Callable[[SyntheticProblem], None] = lambda p: None) -> Suite:
-    """Generate every plugin's synthetic cases into ``folder``; a plugin that fails is reported and left out."""
+    """Generate every detector's synthetic cases into ``folder``; a detector that fails is reported and left out."""
     def generated() -> Iterator[tuple[str, SyntheticCase]]:
-        for outcome in host.call_each("forensics_synthetic_cases", seed=seed, count=count):
-            if outcome.error is not None:
-                on_problem(SyntheticProblem(outcome.plugin, one_line(outcome.error)))
+        for name, entry in host.detectors.items():
+            if not implements(entry.detector, "synthetic_cases"):
                 continue
             try:
-                for case in outcome.value or ():
+                for case in entry.detector.synthetic_cases(seed, count) or ():
                     if not isinstance(case, SyntheticCase):
                         raise TypeError(f"yielded {type(case).__name__}, not SyntheticCase")
-                    yield outcome.plugin, case
+                    yield name, case
             except Exception as exc:
-                on_problem(SyntheticProblem(outcome.plugin, one_line(exc)))
+                on_problem(SyntheticProblem(name, one_line(exc)))
 
     cases = write_synthetic(generated(), folder)
     if not cases:
-        raise SuiteError("no installed plugin generated synthetic cases")
+        raise SuiteError("no installed detector generated synthetic cases")
     return Suite(SYNTHETIC, f"forensics {__version__} synthetic generators", cases, content_hash(cases))
 
 

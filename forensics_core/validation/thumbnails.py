@@ -24,7 +24,7 @@ _TINT = np.array([255.0, 0.0, 0.0])
 def write_thumbnail(photo: Path, target: Path, host: PluginHost, finding: DetectorFinding | None) -> Path:
     """Write a downscaled copy of ``photo`` (stored grid, orientation not applied) with ``finding``'s map tinted red.
 
-    The map comes from the finding's plugin (``forensics_localize``) at the
+    The map comes from the finding's detector (its ``localize``) at the
     photo's full size and is box-averaged down, so that a small flagged
     region still shows. ``photo`` is only read.
     """

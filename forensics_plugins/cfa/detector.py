@@ -11,12 +11,12 @@ and the photo's own phase to be shown around it.
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Iterable, Mapping
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from forensics_core import DetectorResult, Status
+from forensics_core import Detector, DetectorFinding, DetectorResult, Evidence, Status
 
 from . import naming
 from .bayer import shifted
@@ -25,6 +25,11 @@ from .regions import KINDS, Question, Region, count_tests, detectable_side, scan
 from .residuals import block_features
 from .significance import clopper_pearson, log10_binom_tail
 from .votes import SHIFTS, phase_votes
+from .spec import SPEC
+
+if TYPE_CHECKING:
+    from forensics_core import SyntheticCase
+    from forensics_core.report import ReportSection
 
 
 
@@ -287,3 +292,54 @@ def _summary(details: dict[str, Any], regions: list[dict[str, Any]], nfa: float)
     more = f" and {len(regions) - 1} more" if len(regions) > 1 else ""
     return (f"Region 1{more} ({100 * r['area_fraction']:.1f}% of the photo, {kind}) disagrees with the photo's "
             f"demosaicing phase ({where}), NFA = {_nfa_text(r['log10_nfa'])}.")
+
+
+class ColourFilterArray(Detector):
+    """Blocks whose demosaicing phase departs from the photo's colour filter array (Bayer) grid.
+
+    Each 2 x 2 phase of the Bayer mosaic is tested per block by how well the
+    demosaicing a camera applies explains the block ([1]_, [2]_); regions
+    that vote for another phase than the photo's, or for none, are found
+    a contrario, with a number of false alarms ([3]_).
+
+    References
+    ----------
+    .. [1] A. C. Popescu, H. Farid, Exposing digital forgeries in color filter
+       array interpolated images, IEEE Trans. Signal Processing 53(10), 2005.
+    .. [2] Q. Bammey, R. Grompone von Gioi, J.-M. Morel, Demosaicing to detect
+       demosaicing and image forgeries, IEEE WIFS 2022.
+    .. [3] A. Desolneux, L. Moisan, J.-M. Morel, From Gestalt Theory to Image
+       Analysis, Springer, 2008.
+
+    Examples
+    --------
+    This camera photo's JPEG compression has erased the mosaic, so there is
+    nothing to compare and the detector declines:
+
+    >>> from forensics_core import load_evidence
+    >>> from forensics_plugins.cfa.spec import DEFAULT_PARAMS
+    >>> result = ColourFilterArray().analyze(load_evidence("tests/data/exif/87_OSError.jpg"), DEFAULT_PARAMS)
+    >>> result.status.value, result.details["trace_present"], result.details["grid"]
+    ('inconclusive', False, [140, 93])
+    """
+
+    spec = SPEC
+
+    def analyze(self, evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
+        """The stored RGB grid's per-block phase votes and the regions that vote for another phase."""
+        return analyse(evidence.pixels, params)
+
+    def report_section(self, finding: DetectorFinding, evidence: Evidence) -> ReportSection | None:
+        """The vote map, the flagged regions and their tests; the generic section when no thresholds were set."""
+        from .section import report_section
+
+        return report_section(finding, evidence) if finding.details.get("thresholds") else None
+
+    def localize(self, finding: DetectorFinding, shape: tuple[int, int]) -> np.ndarray:
+        return regions_mask(finding.details, shape)
+
+    def synthetic_cases(self, seed: int, count: int) -> Iterable[SyntheticCase]:
+        """Demosaiced scenes, authentic and with a piece pasted on another phase or resampled."""
+        from .synth import synthetic_cases
+
+        return synthetic_cases(seed, count)

@@ -14,20 +14,24 @@ counts like any other detector's.
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Iterable, Mapping
+from typing import TYPE_CHECKING, Any
 
 import cv2
 import numpy as np
 
-from forensics_core import DetectorResult, Status
+from forensics_core import Detector, DetectorFinding, DetectorResult, Evidence, Status
 
 from .dense import DenseCandidate, translations
 from .identity import Identity, best_alignment, residual
 from .keypoints import self_matches, work_image
 from .lattice import lattice_peak, lattice_peaks
-from .spec import GRAIN, KEYPOINTS
+from .spec import GRAIN, KEYPOINTS, SPEC
 from .transforms import Hypothesis, hypotheses
+
+if TYPE_CHECKING:
+    from forensics_core import SyntheticCase
+    from forensics_core.report import ReportSection
 
 # A dense move this close (pixels) to a keypoints' transform without rotation
 # or scaling is the same candidate, already compared.
@@ -272,3 +276,57 @@ def regions_mask(details: Mapping[str, Any], shape: tuple[int, int]) -> np.ndarr
         for polygon in (square, source):
             cv2.fillConvexPoly(mask, np.round(polygon).astype(np.int32), 1)
     return mask.astype(bool)
+
+
+class CopyMove(Detector):
+    """Regions that reappear elsewhere in the same photo, moved, rotated or scaled.
+
+    SIFT keypoints matched within the photo ([1]_, [2]_) and a dense search
+    for translated windows ([3]_) propose moves; each is checked by aligning
+    the two windows pixel by pixel, since a true copy shares its grain with
+    its source and a repeated pattern does not.
+
+    References
+    ----------
+    .. [1] I. Amerini, L. Ballan, R. Caldelli, A. Del Bimbo, G. Serra, A
+       SIFT-based forensic method for copy-move attack detection and
+       transformation recovery, IEEE Trans. Information Forensics and
+       Security 6(3), 2011.
+    .. [2] D. G. Lowe, Distinctive image features from scale-invariant
+       keypoints, International Journal of Computer Vision 60(2), 2004.
+    .. [3] D. Cozzolino, G. Poggi, L. Verdoliva, Efficient dense-field
+       copy-move forgery detection, IEEE Trans. Information Forensics and
+       Security 10(11), 2015.
+
+    Examples
+    --------
+    The chessboard repeats its squares, but no window shares its grain with another:
+
+    >>> from forensics_core import load_evidence
+    >>> from forensics_plugins.copy_move.spec import DEFAULT_PARAMS
+    >>> result = CopyMove().analyze(load_evidence("tests/data/calibration/left01.jpg"), DEFAULT_PARAMS)
+    >>> result.details["n_keypoints"], len(result.details["hypotheses"]) > 0, result.details["net_peak"] < 0.5
+    (1570, True, True)
+    """
+
+    spec = SPEC
+
+    def analyze(self, evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
+        """Keypoint self-matches and dense translations on the luma, each hypothesis checked pixel by pixel."""
+        return analyse(evidence.luma, params)
+
+    def report_section(self, finding: DetectorFinding, evidence: Evidence) -> ReportSection | None:
+        from .section import report_section
+
+        if "hypotheses" not in finding.details:
+            return None
+        return report_section(finding, evidence)
+
+    def localize(self, finding: DetectorFinding, shape: tuple[int, int]) -> np.ndarray:
+        """The best hypothesis' copied windows and their sources."""
+        return regions_mask(finding.details, shape)
+
+    def synthetic_cases(self, seed: int, count: int) -> Iterable[SyntheticCase]:
+        from .synth import synthetic_cases
+
+        return synthetic_cases(seed, count)

@@ -40,15 +40,15 @@ from __future__ import annotations
 import contextlib
 import io
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from functools import partial
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from PIL import Image
 from scipy import ndimage
 
-from forensics_core import PROCESSING_KEY, DetectorResult, Evidence, Processing, Status
+from forensics_core import PROCESSING_KEY, Detector, DetectorFinding, DetectorResult, Evidence, Processing, Status
 
 from .earlier_grid import CELLS, LEAD, MIN_CELL_SHARE, MIN_CELL_SHARE_ALL, EarlierGrid, earlier_grid
 from .lattice import FREQUENCIES, MIN_FREQUENCIES, block_any, block_coefficients, estimate_steps, missing_regions, \
@@ -60,6 +60,11 @@ from .resampling import MIN_FIELD_SHARE, MIN_REGIONS, MIN_SPREAD_DEG, PERP_TOL, 
     field_explained, radial_warp
 from .votes import grid_code, grid_origin, vote_map
 from .zeros import ZERO_THRESHOLD, flat_blocks, zero_counts
+from .spec import SPEC
+
+if TYPE_CHECKING:
+    from forensics_core import SyntheticCase
+    from forensics_core.report import ReportSection
 
 
 # The example luminance table of the JPEG standard (ITU-T T.81, Annex K.1),
@@ -536,11 +541,65 @@ def analyse_luminance(lum: Luminance, params: Mapping[str, Any],
                           headline=_headline(details))
 
 
-def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
-    """Run the detector on a piece of evidence (see :func:`analyse_luminance`)."""
-    t = time.perf_counter()
-    lum = luminance(evidence)
-    elapsed = time.perf_counter() - t
-    result = analyse_luminance(lum, params, evidence.decoding)
-    result.details["elapsed_s"] = {"luminance": round(elapsed, 4), **result.details.get("elapsed_s", {})}
-    return result
+class JpegGrid(Detector):
+    """Regions compressed on another 8 x 8 JPEG grid than the rest of the photo, and processing that moved the grid.
+
+    Each block votes for the grid origin at which its DCT has the most
+    zeros ([1]_, [2]_); regions voting for another origin than the photo's
+    main grid are found a contrario, with a number of false alarms ([3]_).
+
+    References
+    ----------
+    .. [1] T. Nikoukhah, J. Anger, M. Colom, J.-M. Morel, R. Grompone von
+       Gioi, ZERO: a local JPEG grid origin detector based on the number of
+       DCT zeros and its applications in image forensics, Image Processing
+       On Line 11, 2021.
+    .. [2] T. Nikoukhah, J. Anger, T. Ehret, M. Colom, J.-M. Morel, R.
+       Grompone von Gioi, JPEG grid detection based on the number of DCT
+       zeros and its application to automatic and localized forgery
+       detection, CVPR Workshops, 2019.
+    .. [3] A. Desolneux, L. Moisan, J.-M. Morel, From Gestalt Theory to Image
+       Analysis, Springer, 2008.
+
+    Examples
+    --------
+    >>> from forensics_core import load_evidence
+    >>> from forensics_plugins.jpeg_grid.spec import DEFAULT_PARAMS
+    >>> evidence = load_evidence("tests/data/calibration/left01.jpg")
+    >>> result = JpegGrid().analyze(evidence, DEFAULT_PARAMS)
+
+    The chessboard was saved once, at about quality 50, and no region votes for another grid:
+
+    >>> result.details["jpeg_quality_estimate"], result.details["n_meaningful"], result.nfa
+    (50, 0, 1.0)
+    """
+
+    spec = SPEC
+
+    def analyze(self, evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
+        """Run the detector on a piece of evidence (see :func:`analyse_luminance`)."""
+        t = time.perf_counter()
+        lum = luminance(evidence)
+        elapsed = time.perf_counter() - t
+        result = analyse_luminance(lum, params, evidence.decoding)
+        result.details["elapsed_s"] = {"luminance": round(elapsed, 4), **result.details.get("elapsed_s", {})}
+        return result
+
+    def report_section(self, finding: DetectorFinding, evidence: Evidence) -> ReportSection | None:
+        from .section import report_section
+
+        return report_section(finding, evidence) if finding.details.get("main_grid") is not None else None
+
+    def localize(self, finding: DetectorFinding, shape: tuple[int, int]) -> np.ndarray | None:
+        """The meaningful regions' tiles, from the vote map the finding stores; None when it stores none."""
+        if finding.details.get("map") is None:
+            return None
+        from .figures import regions_mask
+
+        return regions_mask(finding.details, shape)
+
+    def synthetic_cases(self, seed: int, count: int) -> Iterable[SyntheticCase]:
+        """PNG and JPEG originals, pastes on another grid, and innocent crops and resamplings."""
+        from .synth import synthetic_cases
+
+        return synthetic_cases(seed, count)

@@ -118,7 +118,7 @@ def vote_map_png(details: Mapping[str, Any], scale: int = 4) -> bytes:
 
 
 def regions_mask(details: dict[str, Any], shape: tuple[int, int]) -> np.ndarray:
-    """Boolean ``(H, W)`` map of the pixels in the finding's meaningful regions (``forensics_localize``)."""
+    """Boolean ``(H, W)`` map of the pixels in the finding's meaningful regions (``JpegGrid.localize``)."""
     mask = np.zeros(shape, bool)
     cell = details["map"]["cell_px"]
     tiles_shape = tuple(details["map"]["tiles_shape"])

@@ -1,53 +1,12 @@
-"""Hook implementations of the jpeg_grid plugin (entry point ``jpeg_grid``)."""
+"""The jpeg_grid plugin (entry point ``jpeg_grid``): registers :class:`.detector.JpegGrid`; its module is imported only when the detectors are needed."""
 
 from __future__ import annotations
 
-import importlib
-
 from forensics_core import hookimpl
 
-from .spec import NAME, SPEC
-
 
 @hookimpl
-def forensics_register_detectors():
-    return [SPEC]
+def forensics_register_detectors(register):
+    from .detector import JpegGrid
 
-
-@hookimpl
-def forensics_prepare():
-    importlib.import_module(f"{__package__}.detector")
-
-
-@hookimpl
-def forensics_analyze(detector, evidence, params):
-    if detector != NAME:
-        return None
-    from .detector import analyse
-
-    return analyse(evidence, params)
-
-
-@hookimpl
-def forensics_report_section(finding, evidence):
-    if finding.name != NAME or finding.details.get("main_grid") is None:
-        return None
-    from .section import report_section
-
-    return report_section(finding, evidence)
-
-
-@hookimpl
-def forensics_synthetic_cases(seed, count):
-    from .synth import synthetic_cases
-
-    return synthetic_cases(seed, count)
-
-
-@hookimpl
-def forensics_localize(finding, shape):
-    if finding.name != NAME or finding.details.get("map") is None:
-        return None
-    from .figures import regions_mask
-
-    return regions_mask(finding.details, shape)
+    register(JpegGrid())

@@ -53,7 +53,13 @@ def _column_pass(a0, a1, a2, a3, a4, a5, a6, a7, count, t, ev, od, n, first):
     """8-point DCT of ``a0..a7`` (rows of one row-DCT coefficient) at each of ``n`` columns; adds those below t.
 
     ``first`` marks the pass over the row-DCT's DC, whose own DC (the block's
-    DC coefficient) is not counted.
+    DC coefficient) is not counted. ``count`` (shape (n,), int16) gathers
+    the counts, ``t`` is the zero threshold and ``ev``, ``od`` the even and
+    odd halves of the DCT matrix. The eight rows come apart so that the
+    inlined loop reads each as its own array. All fourteen are positional
+    because numba's ``inline="always"`` pass fails to type a call that binds
+    arguments by keyword (numba 0.68), and the inlining is what makes this
+    pass fast.
     """
     e00, e01, e02, e03 = ev[0, 0], ev[0, 1], ev[0, 2], ev[0, 3]
     e10, e11, e12, e13 = ev[1, 0], ev[1, 1], ev[1, 2], ev[1, 3]

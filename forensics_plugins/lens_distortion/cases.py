@@ -1,4 +1,4 @@
-"""The lens plugin's synthetic cases for ``forensics validate synthetic`` (hook ``forensics_synthetic_cases``).
+"""The lens plugin's synthetic cases for ``forensics validate synthetic`` (``LensDistortion.synthetic_cases``).
 
 Authentic photos (:mod:`.photo`) and splices of the paper's three kinds
 (:mod:`.splice`), each with its own lens, size and JPEG quality.

@@ -44,7 +44,7 @@ def _parse_size(ctx: click.Context, param: click.Parameter, value: str) -> tuple
 @click.option("--blur", type=click.FloatRange(min=0.0), default=0.7, show_default=True,
               help="Optics blur sigma, pixels.")
 def synth_command(
-    out_dir: Path, kind: str, count: int, seed: int, size: tuple[int, int], k1: float,
+    *, out_dir: Path, kind: str, count: int, seed: int, size: tuple[int, int], k1: float,
     jpeg_quality: int, resize: float, noise: float, blur: float,
 ) -> None:
     """Write synthetic authentic and spliced photos with known lens distortion to OUT_DIR.

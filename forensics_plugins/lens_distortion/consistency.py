@@ -685,12 +685,16 @@ def _inconclusive(
     reason: str, fits: list[LineK1], rules: PaperRules, alpha: float, line_se: np.ndarray
 ) -> ConsistencyResult:
     departures = tuple(
-        LineDeparture(j, f.k1, np.nan, np.nan, np.nan, np.nan, False, False, f.distance, f.residual_rms_px, f.n_effective)
+        LineDeparture(line_id=j, k1=f.k1, delta_k1=np.nan, delta_k1_stderr=np.nan, z=np.nan, p_value=np.nan,
+                      flagged=False, informative=False, distance=f.distance, residual_rms_px=f.residual_rms_px,
+                      n_effective=f.n_effective)
         for j, f in enumerate(fits)
     )
     test = "no test: " + reason
-    return ConsistencyResult("inconclusive", None, departures, None, np.nan, test, "none", (), rules, False, reason,
-                             alpha, tuple(fits), (), tuple(float(x) for x in line_se))
+    return ConsistencyResult(verdict="inconclusive", model=None, departures=departures, region=None, p_value=np.nan,
+                             test=test, evidence="none", flagged_ids=(), paper_rules=rules, informative=False,
+                             reason=reason, alpha=alpha, line_fits=tuple(fits), outlier_ids=(),
+                             line_k1_stderr=tuple(float(x) for x in line_se))
 
 
 def assess(
@@ -768,6 +772,21 @@ def assess(
        inherent lens radial distortion, IJCSI 7(6), 2010.
     .. [2] K. L. Lange, R. J. A. Little, J. M. G. Taylor, Robust statistical
        modeling using the t distribution, JASA 84(408), 1989.
+
+    Examples
+    --------
+    A rendered scene of straight edges through one lens (``k1 = 0.1``): one
+    model explains every line, and its ``k1`` is the lens':
+
+    >>> from forensics_plugins.lens_distortion.edges import subpixel_edges
+    >>> from forensics_plugins.lens_distortion.lines import extract_lines
+    >>> from forensics_plugins.lens_distortion.photo import render_authentic
+    >>> photo = render_authentic(3, size=(800, 600), k1=0.1, jpeg_quality=None, noise=0.0)
+    >>> luma = photo.image.mean(axis=2) / 255.0
+    >>> lines = extract_lines(subpixel_edges(luma), luma.shape, min_length_px=120)
+    >>> result = assess([line.points for line in lines], luma.shape)
+    >>> result.verdict, round(result.model.k1, 3), result.p_value
+    ('consistent', 0.1, 1.0)
     """
     scale = norm_scale(shape)
     norm_lines = [to_normalised(p, shape) for p in lines_px]
@@ -786,8 +805,10 @@ def assess(
             "short, noisy or near-radial lines do not constrain k1)"
         )
         return _inconclusive(reason, paper_fits, rules, alpha, se_paper)
-    return _decide(norm_lines, informative, paper_fits, chords, rules, shape, alpha, (tau_k1, bow_rel, dof),
-                   np.array([np.inf, k2_prior_sd, centre_prior_sd, centre_prior_sd]), single_lines, se_paper, tau_photo)
+    settings = _Settings(alpha=alpha, tau_k1=tau_k1, bow_rel=bow_rel, dof=dof, tau_photo=tau_photo,
+                         prior_sd=np.array([np.inf, k2_prior_sd, centre_prior_sd, centre_prior_sd]),
+                         single_lines=single_lines)
+    return _decide(norm_lines, informative, paper_fits, chords, rules, shape, se_paper, settings)
 
 
 def _model_var(fits: Sequence[LineK1], chords_px: np.ndarray, tau_k1: float, bow_rel: float) -> np.ndarray:
@@ -802,9 +823,25 @@ def _paper_model_fits(norm_lines: list[np.ndarray], usable: list[int], scale: fl
     """Joint per-line fits under the paper's model (centre fixed, no k2); short lines get inf stderr."""
     fitted = dict(zip(usable, fit_lines_multistart([norm_lines[j] for j in usable], scale))) if usable else {}
     return [
-        fitted.get(j) or LineK1(np.nan, np.inf, np.inf, np.nan, len(p), 0.0, np.nan, np.nan, np.nan, 0.0)
+        fitted.get(j) or LineK1(k1=np.nan, k1_stderr=np.inf, k1_stderr_white=np.inf, residual_rms_px=np.nan,
+                                n_points=len(p), n_effective=0.0, distance=np.nan, theta=np.nan, rho=np.nan,
+                                leverage_px=0.0)
         for j, p in enumerate(norm_lines)
     ]
+
+
+@dataclass(frozen=True)
+class _Settings:
+    """How :func:`assess` tests a photo's lines (its keyword arguments, gathered for :func:`_decide`)."""
+
+    alpha: float
+    tau_k1: float
+    bow_rel: float
+    dof: float
+    tau_photo: float
+    prior_sd: np.ndarray
+    """Prior standard deviations of ``(k1, k2, cx, cy)``, shape (4,); inf where there is none."""
+    single_lines: bool
 
 
 def _decide(
@@ -814,14 +851,18 @@ def _decide(
     chords_px: np.ndarray,
     rules: PaperRules,
     shape: tuple[int, ...],
-    alpha: float,
-    error_model: tuple[float, float, float],
-    prior_sd: np.ndarray,
-    single_lines: bool,
     line_se: np.ndarray,
-    tau_photo: float,
+    settings: _Settings,
 ) -> ConsistencyResult:
-    tau_k1, bow_rel, dof = error_model
+    """The test of :func:`assess` once enough lines are informative.
+
+    ``norm_lines`` are all the lines in normalised coordinates, ``informative``
+    the indices of those that take part, ``paper_fits`` and ``line_se`` every
+    line's fit under the paper's model and its standard error,
+    ``chords_px`` every line's end-to-end length in pixels.
+    """
+    alpha, tau_k1, bow_rel, dof = settings.alpha, settings.tau_k1, settings.bow_rel, settings.dof
+    prior_sd, single_lines, tau_photo = settings.prior_sd, settings.single_lines, settings.tau_photo
     scale = norm_scale(shape)
     chosen = [norm_lines[j] for j in informative]
     # Neighbouring edge points are strongly correlated, so the global fit
@@ -870,7 +911,7 @@ def _decide(
     region = region_test(
         midpoints, directions,
         chords_px[informative] >= REGION_MIN_LENGTH * min(shape[0], shape[1]), dep.delta, dep.stderr,
-        float(beta[0]), beta[2:], np.array([shape[1], shape[0]]) / (2.0 * scale), dof)
+        k1=float(beta[0]), centre=beta[2:], half_extent=np.array([shape[1], shape[0]]) / (2.0 * scale), dof=dof)
     line_flag = line_p * line_p.size < alpha
     criteria = _criteria(line_p, region, single_lines)
     image_p = float(min(1.0, len(criteria) * min(criteria.values())))
@@ -918,9 +959,10 @@ def _decide(
            if len(criteria) > 1 else ".")
     )
     verdict = "inconsistent" if image_p < alpha else "consistent"
-    return ConsistencyResult(verdict, model, departures, region, image_p, test, evidence,
-                             tuple(sorted(flagged)), rules, True, None, alpha, tuple(paper_fits),
-                             tuple(sorted(outliers)), tuple(float(x) for x in line_se))
+    return ConsistencyResult(verdict=verdict, model=model, departures=departures, region=region, p_value=image_p,
+                             test=test, evidence=evidence, flagged_ids=tuple(sorted(flagged)), paper_rules=rules,
+                             informative=True, reason=None, alpha=alpha, line_fits=tuple(paper_fits),
+                             outlier_ids=tuple(sorted(outliers)), line_k1_stderr=tuple(float(x) for x in line_se))
 
 
 def _criteria(line_p: np.ndarray, region: RegionTest | None, single_lines: bool) -> dict[str, float]:
@@ -945,11 +987,13 @@ def _line_departures(
     for j, f in enumerate(paper_fits):
         i = position.get(j)
         if i is None:
-            out.append(LineDeparture(j, np.nan, np.nan, np.nan, np.nan, np.nan, False, False, f.distance,
-                                     f.residual_rms_px, f.n_effective))
+            out.append(LineDeparture(line_id=j, k1=np.nan, delta_k1=np.nan, delta_k1_stderr=np.nan, z=np.nan,
+                                     p_value=np.nan, flagged=False, informative=False, distance=f.distance,
+                                     residual_rms_px=f.residual_rms_px, n_effective=f.n_effective))
             continue
         g = fits[i]
-        out.append(LineDeparture(j, g.k1, float(dep.delta[i]), float(dep.stderr[i]), float(line_z[i]),
-                                 float(line_p[i]), bool(line_flag[i]), True, g.distance, g.residual_rms_px,
-                                 g.n_effective))
+        out.append(LineDeparture(line_id=j, k1=g.k1, delta_k1=float(dep.delta[i]), delta_k1_stderr=float(dep.stderr[i]),
+                                 z=float(line_z[i]), p_value=float(line_p[i]), flagged=bool(line_flag[i]),
+                                 informative=True, distance=g.distance, residual_rms_px=g.residual_rms_px,
+                                 n_effective=g.n_effective))
     return tuple(out)

@@ -8,19 +8,24 @@ global-model consistency test (:mod:`.consistency`).
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from forensics_core import RADIAL_DISTORTION_KEY, DetectorResult, RadialDistortion, Status
+from forensics_core import RADIAL_DISTORTION_KEY, Detector, DetectorFinding, DetectorResult, Evidence, RadialDistortion, Status
 
 from .consistency import ConsistencyResult, GlobalModel, assess
 from .edges import subpixel_edges
 from .geometry import norm_scale, to_normalised
 from .k1 import k1_paper, signed_distance, trim_to_shortest
 from .lines import DistortedLine, extract_lines
+from .spec import SPEC
+
+if TYPE_CHECKING:
+    from forensics_core import SyntheticCase
+    from forensics_core.report import ReportSection
 
 # Lines of at least min_length_fraction (5 %) of a side need some tens of
 # edge points each; below this size there are none worth fitting.
@@ -174,21 +179,6 @@ def _regions(records: list[dict[str, Any]]) -> list[dict[str, float]]:
     return [{"x0": round(float(x0), 1), "y0": round(float(y0), 1), "x1": round(float(x1), 1), "y1": round(float(y1), 1)}]
 
 
-def regions_mask(details: dict[str, Any], shape: tuple[int, int]) -> np.ndarray:
-    """Boolean ``(H, W)`` map of the boxes in ``details["regions_px"]`` (pixel coordinates, inclusive).
-
-    Only an outline of where the departing lines run: the pasted part
-    usually extends beyond them, so its localisation scores are a lower bound.
-    """
-    mask = np.zeros(shape, dtype=bool)
-    h, w = shape
-    for r in details.get("regions_px") or []:
-        x0, y0 = max(0, int(np.floor(r["x0"]))), max(0, int(np.floor(r["y0"])))
-        x1, y1 = min(w - 1, int(np.ceil(r["x1"]))), min(h - 1, int(np.ceil(r["y1"])))
-        mask[y0 : y1 + 1, x0 : x1 + 1] = True
-    return mask
-
-
 def _lens_words(m: GlobalModel) -> str:
     """The photo's lens in words: the one-term k1 and the displacement it makes at the stated radius."""
     one = m.one_term
@@ -335,3 +325,64 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
         details=details,
         headline=headline,
     )
+
+
+class LensDistortion(Detector):
+    """Straight lines whose bow disagrees with one lens' radial distortion.
+
+    The photo's straight edges (:mod:`.edges`, :mod:`.lines`) each give a
+    ``k1`` (:mod:`.k1`); one lens model fitted to all of them
+    (:mod:`.consistency`) is the null, and a region whose lines follow
+    another lens or a moved copy of this one (:mod:`.regions`) the
+    alternative ([1]_).
+
+    References
+    ----------
+    .. [1] H. R. Chennamma, L. Rangarajan, Image splicing detection using
+       inherent lens radial distortion, IJCSI 7(6), 2010.
+    .. [2] F. Devernay, O. Faugeras, Straight lines have to be straight,
+       Machine Vision and Applications 13, 2001.
+
+    Examples
+    --------
+    The chessboard's lines all follow one lens:
+
+    >>> from forensics_core import load_evidence
+    >>> from forensics_plugins.lens_distortion.spec import DEFAULT_PARAMS
+    >>> result = LensDistortion().analyze(load_evidence("tests/data/calibration/left01.jpg"), DEFAULT_PARAMS)
+    >>> result.status.value, result.p_value, result.headline
+    ('ok', 1.0, 'All 33 informative lines fit one lens model, k1 = 0.126 ± 0.011; no line or region departs (p = 1).')
+    """
+
+    spec = SPEC
+
+    def analyze(self, evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
+        """Sub-pixel edges of the luma, grouped into lines, each line's k1, and their consistency with one lens."""
+        return analyse(evidence.luma, params)
+
+    def report_section(self, finding: DetectorFinding, evidence: Evidence) -> ReportSection | None:
+        if finding.details.get("paper_rules") is None:
+            return None
+        from .section import report_section
+
+        return report_section(finding, evidence)
+
+    def localize(self, finding: DetectorFinding, shape: tuple[int, int]) -> np.ndarray:
+        """Boolean ``(H, W)`` map of the boxes in ``details["regions_px"]`` (pixel coordinates, inclusive).
+
+        Only an outline of where the departing lines run: the pasted part
+        usually extends beyond them, so its localisation scores are a lower bound.
+        """
+        mask = np.zeros(shape, dtype=bool)
+        h, w = shape
+        for r in finding.details.get("regions_px") or []:
+            x0, y0 = max(0, int(np.floor(r["x0"]))), max(0, int(np.floor(r["y0"])))
+            x1, y1 = min(w - 1, int(np.ceil(r["x1"]))), min(h - 1, int(np.ceil(r["y1"])))
+            mask[y0 : y1 + 1, x0 : x1 + 1] = True
+        return mask
+
+    def synthetic_cases(self, seed: int, count: int) -> Iterable[SyntheticCase]:
+        """Rendered scenes of straight edges through a lens, with and without a piece from another lens."""
+        from .cases import validation_cases
+
+        return validation_cases(seed, count)

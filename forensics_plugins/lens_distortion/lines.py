@@ -678,8 +678,12 @@ def _hugs_border(points: np.ndarray, shape: tuple[int, int], band_px: float) -> 
     return bool(x.max() < band_px or y.max() < band_px or x.min() > w - 1 - band_px or y.min() > h - 1 - band_px)
 
 
-def _build_lines(xy, p, eid, owner, piece, g: _Groups, keep, rule: _GatherRule, tolerance_px, max_outliers):
+def _build_lines(xy, p, eid, owner, piece, g: _Groups, keep, rule: _GatherRule, *, tolerance_px, max_outliers):
     """Final checks and :class:`DistortedLine` objects for the groups where ``keep``.
+
+    ``xy``, ``p``, ``eid``, ``owner`` and ``piece`` are the gathered points'
+    pixel and normalised positions, edge ids, owning group and piece, one
+    row each; ``g`` the groups, ``keep`` which of them to build.
 
     Points farther than ``tolerance_px`` from their group's fit are dropped;
     a group keeps its line if they are at most ``max_outliers`` of its points
@@ -814,6 +818,29 @@ def extract_lines(
     -------
     list of DistortedLine
         Longest first; ties by first point ``(x, y)``.
+
+    Notes
+    -----
+    Pieces are gathered into one line when together they fit one distorted
+    straight line, i.e. the image of a straight line under eq. (1) of [1]_
+    with some ``|k1| <= max_k1``, within ``tolerance_px`` (the tolerance
+    region of [1]_, fig. 3).
+
+    References
+    ----------
+    .. [1] H. R. Chennamma, L. Rangarajan, Image splicing detection using
+       inherent lens radial distortion, IJCSI 7(6), 2010, sec. 3.3.
+
+    Examples
+    --------
+    The four sides of a bright rectangle, longest first:
+
+    >>> from forensics_plugins.lens_distortion.edges import subpixel_edges
+    >>> img = np.zeros((200, 300))
+    >>> img[50:150, 60:240] = 1.0
+    >>> lines = extract_lines(subpixel_edges(img), img.shape, min_length_px=80)
+    >>> [round(line.length_px) for line in lines]
+    [177, 177, 97, 97]
     """
     h, w = shape[0], shape[1]
     scale_px = norm_scale(shape)
@@ -845,7 +872,8 @@ def extract_lines(
     piece = np.cumsum(starts) - 1
     owner = g.label[piece]
     extent = np.hypot(*(g.end_xy[g.end_ids[:, 0]] - g.end_xy[g.end_ids[:, 1]]).T)
-    lines = _build_lines(xy, p, eid, owner, piece, g, extent >= 0.9 * min_length_px, rule, tolerance_px, max_outliers)
+    lines = _build_lines(xy, p, eid, owner, piece, g, extent >= 0.9 * min_length_px, rule, tolerance_px=tolerance_px,
+                         max_outliers=max_outliers)
     lines = [ln for ln in lines if ln.length_px >= min_length_px and not _hugs_border(ln.points, shape, hug_px)]
     lines.sort(key=lambda ln: (-ln.length_px, ln.points[0, 0], ln.points[0, 1]))
     return lines

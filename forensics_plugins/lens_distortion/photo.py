@@ -108,9 +108,14 @@ def seed_streams(seed: int) -> tuple[np.random.Generator, np.random.Generator, n
     return np.random.default_rng(host), np.random.default_rng(noise), splice
 
 
-def image_params(kind: str, seed: int, size, k1, k2, centre, noise, blur, jpeg_quality, resize,
+def image_params(kind: str, seed: int, *, size, k1, k2, centre, noise, blur, jpeg_quality, resize,
                  feather_px=None) -> dict:
-    """The flat JSON-able arguments that regenerate an image (:attr:`.truth.SynthImage.params`)."""
+    """The flat JSON-able arguments that regenerate an image (:attr:`.truth.SynthImage.params`).
+
+    ``kind`` and ``seed`` name the image; the keywords are the arguments of
+    :func:`render_authentic` (and ``feather_px`` of a splice's edge) that
+    made it.
+    """
     params = {
         "kind": kind, "seed": int(seed), "size": [int(size[0]), int(size[1])], "k1": float(k1), "k2": float(k2),
         "centre": [float(centre[0]), float(centre[1])], "noise": float(noise), "blur": float(blur),
@@ -175,5 +180,6 @@ def render_authentic(
         pasted_k1=None,
         lines_px=[resize_points(p, shape_in, pixels.shape[:2]) for p in capture.lines_px],
         seed=int(seed),
-        params=image_params("authentic", seed, size, k1, k2, centre, noise, blur, jpeg_quality, resize),
+        params=image_params("authentic", seed, size=size, k1=k1, k2=k2, centre=centre, noise=noise, blur=blur,
+                            jpeg_quality=jpeg_quality, resize=resize),
     )

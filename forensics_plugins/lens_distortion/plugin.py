@@ -1,40 +1,15 @@
-"""Hook implementations of the lens distortion plugin (entry point ``lens_distortion``)."""
+"""The lens_distortion plugin (entry point ``lens_distortion``): registers :class:`.detector.LensDistortion`; its module is imported only when the detectors are needed."""
 
 from __future__ import annotations
 
-import importlib
-
 from forensics_core import hookimpl
 
-from .spec import NAME, SPEC
-
 
 @hookimpl
-def forensics_register_detectors():
-    return [SPEC]
+def forensics_register_detectors(register):
+    from .detector import LensDistortion
 
-
-@hookimpl
-def forensics_prepare():
-    importlib.import_module(f"{__package__}.detector")
-
-
-@hookimpl
-def forensics_analyze(detector, evidence, params):
-    if detector != NAME:
-        return None
-    from .detector import analyse
-
-    return analyse(evidence.luma, params)
-
-
-@hookimpl
-def forensics_report_section(finding, evidence):
-    if finding.name != NAME or finding.details.get("paper_rules") is None:
-        return None
-    from .section import report_section
-
-    return report_section(finding, evidence)
+    register(LensDistortion())
 
 
 @hookimpl
@@ -42,19 +17,3 @@ def forensics_register_commands(cli):
     from .command import synth_command
 
     cli.add_command(synth_command, "synth")
-
-
-@hookimpl
-def forensics_synthetic_cases(seed, count):
-    from .cases import validation_cases
-
-    return validation_cases(seed, count)
-
-
-@hookimpl
-def forensics_localize(finding, shape):
-    if finding.name != NAME:
-        return None
-    from .detector import regions_mask
-
-    return regions_mask(finding.details, shape)

@@ -262,7 +262,8 @@ def make_splice(
         pasted_k1=None if kind == "copy_move" else float(source.k1),
         lines_px=[resize_points(p, shape, out_shape) for p in host_lines],
         seed=int(seed),
-        params=image_params(kind, seed, size, k1, k2, centre, noise, blur, jpeg_quality, resize, feather_px),
+        params=image_params(kind, seed, size=size, k1=k1, k2=k2, centre=centre, noise=noise, blur=blur,
+                            jpeg_quality=jpeg_quality, resize=resize, feather_px=feather_px),
         paste=paste,
     )
 

@@ -1,37 +1,12 @@
-"""Hook implementations of the metadata plugin (entry point ``metadata``)."""
+"""The metadata plugin (entry point ``metadata``): registers :class:`.detector.Metadata`; its module is imported only when the detectors are needed."""
 
 from __future__ import annotations
 
-import importlib
-
 from forensics_core import hookimpl
 
-from .spec import NAME, SPEC
-
 
 @hookimpl
-def forensics_register_detectors():
-    return [SPEC]
+def forensics_register_detectors(register):
+    from .detector import Metadata
 
-
-@hookimpl
-def forensics_prepare():
-    importlib.import_module(f"{__package__}.detector")
-
-
-@hookimpl
-def forensics_analyze(detector, evidence, params, prior):
-    if detector != NAME:
-        return None
-    from .detector import analyse
-
-    return analyse(evidence, params, prior)
-
-
-@hookimpl
-def forensics_report_section(finding, evidence):
-    if finding.name != NAME or not finding.details.get("checks"):
-        return None
-    from .section import report_section
-
-    return report_section(finding, evidence)
+    register(Metadata())

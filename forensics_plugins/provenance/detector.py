@@ -24,13 +24,17 @@ from collections.abc import Mapping
 from dataclasses import asdict
 from importlib.metadata import version
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import c2pa
 
-from forensics_core import HEADLINE_WORDS, SMALL, DetectorResult, Evidence, Status, read_limited
+from forensics_core import HEADLINE_WORDS, SMALL, Detector, DetectorFinding, DetectorResult, Evidence, Status, read_limited
 
 from .credentials import AI_SOURCE_TYPES, Credentials, read
+from .spec import SPEC
+
+if TYPE_CHECKING:
+    from forensics_core.report import ReportSection
 
 # Actions after which the content is no longer what was captured (C2PA 2.1, 18.4).
 EDITS = ("c2pa.edited", "c2pa.filtered", "c2pa.color_adjustments", "c2pa.cropped", "c2pa.resized",
@@ -127,53 +131,81 @@ def _beside(side: Credentials | None, error: str | None) -> str:
     return f" The .c2pa file beside the photo holds another manifest store, which {state}."
 
 
-def analyse(evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
-    """Read and validate the photo's Content Credentials, those it embeds and those of a sidecar beside it.
+class Provenance(Detector):
+    """The Content Credentials (C2PA) the file carries, validated, and what they say was done.
 
-    The embedded store, when there is one, is the finding's; a ``.c2pa``
-    sidecar is validated against the same bytes beside it, never instead of
-    it, and a sidecar that cannot be read is reported as such.
+    References
+    ----------
+    .. [1] Coalition for Content Provenance and Authenticity, C2PA technical
+       specification 2.1, 2024.
 
-    Returns
-    -------
-    DetectorResult
-        ``inconclusive`` without credentials, when the store cannot be read
-        or when the SDK does not validate credentials whose binding holds
-        (an expired or revoked signer); otherwise ``ok`` with the score of
-        the module docstring and no p-value.
+    Examples
+    --------
+    Most photos carry none, and their absence is no finding:
+
+    >>> from forensics_core import load_evidence
+    >>> from forensics_plugins.provenance.spec import DEFAULT_PARAMS
+    >>> Provenance().analyze(load_evidence("tests/data/calibration/left01.jpg"), DEFAULT_PARAMS).score is None
+    True
     """
-    sidecar, sidecar_sha = _sidecar(evidence, params)
-    anchors_file = str(params["trust_anchors_file"])
-    try:
-        anchors = read_limited(Path(anchors_file), SMALL).decode("ascii") if anchors_file else None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ValueError(f"the trust anchors file cannot be used: {exc}") from None
-    details: dict[str, Any] = {"c2pa": f"{version('c2pa-python')} (c2pa-rs {c2pa.sdk_version()})",
-                               "sidecar_sha256": sidecar_sha,
-                               "trust_anchors_sha256": anchors and hashlib.sha256(anchors.encode()).hexdigest()}
-    own, own_error = _read(evidence, None, anchors)
-    side, side_error = _read(evidence, sidecar, anchors) if sidecar is not None else (None, None)
-    if side_error:
-        details["sidecar_error"] = side_error
-    if own_error:
-        details["error"] = own_error
-        return DetectorResult(Status.INCONCLUSIVE, "Inconclusive: the file carries a C2PA manifest store that cannot "
-                              f"be read ({own_error}).{_beside(side, side_error)}", details=details,
-                              headline="Inconclusive: the file's C2PA manifest store cannot be read.")
-    cred = own or side
-    if cred is None:
-        tail = (f" The .c2pa file beside it cannot be read ({side_error}); that is a fault of that file, not of the "
-                "photo.") if side_error else ""
-        return DetectorResult(Status.INCONCLUSIVE, "Inconclusive: no Content Credentials. Most photos carry none; "
-                              f"their absence says nothing about the content.{tail}", details=details,
-                              headline="Inconclusive: no Content Credentials in the file; most photos carry none.")
-    edited = sorted({a["action"] for a in cred.actions if a["action"] in EDITS})
-    summary, score = _summary(cred, edited)
-    summary += _ingredients_text(cred) + (_beside(side, side_error) if own is not None else "")
-    details.update(credentials=asdict(cred), edits=edited)
-    if own is not None and side is not None:
-        details["sidecar_credentials"] = asdict(side)
-    headline = _headline(cred, edited)
-    if score is None:
-        return DetectorResult(Status.INCONCLUSIVE, f"Inconclusive: {summary}", details=details, headline=headline)
-    return DetectorResult(Status.OK, summary, score=score, details=details, headline=headline)
+
+    spec = SPEC
+
+    def analyze(self, evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
+        """Read and validate the photo's Content Credentials, those it embeds and those of a sidecar beside it.
+
+        The embedded store, when there is one, is the finding's; a ``.c2pa``
+        sidecar is validated against the same bytes beside it, never instead of
+        it, and a sidecar that cannot be read is reported as such.
+
+        Returns
+        -------
+        DetectorResult
+            ``inconclusive`` without credentials, when the store cannot be read
+            or when the SDK does not validate credentials whose binding holds
+            (an expired or revoked signer); otherwise ``ok`` with the score of
+            the module docstring and no p-value.
+        """
+        sidecar, sidecar_sha = _sidecar(evidence, params)
+        anchors_file = str(params["trust_anchors_file"])
+        try:
+            anchors = read_limited(Path(anchors_file), SMALL).decode("ascii") if anchors_file else None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ValueError(f"the trust anchors file cannot be used: {exc}") from None
+        details: dict[str, Any] = {"c2pa": f"{version('c2pa-python')} (c2pa-rs {c2pa.sdk_version()})",
+                                   "sidecar_sha256": sidecar_sha,
+                                   "trust_anchors_sha256": anchors and hashlib.sha256(anchors.encode()).hexdigest()}
+        own, own_error = _read(evidence, None, anchors)
+        side, side_error = _read(evidence, sidecar, anchors) if sidecar is not None else (None, None)
+        if side_error:
+            details["sidecar_error"] = side_error
+        if own_error:
+            details["error"] = own_error
+            return DetectorResult(Status.INCONCLUSIVE, "Inconclusive: the file carries a C2PA manifest store that cannot "
+                                  f"be read ({own_error}).{_beside(side, side_error)}", details=details,
+                                  headline="Inconclusive: the file's C2PA manifest store cannot be read.")
+        cred = own or side
+        if cred is None:
+            tail = (f" The .c2pa file beside it cannot be read ({side_error}); that is a fault of that file, not of the "
+                    "photo.") if side_error else ""
+            return DetectorResult(Status.INCONCLUSIVE, "Inconclusive: no Content Credentials. Most photos carry none; "
+                                  f"their absence says nothing about the content.{tail}", details=details,
+                                  headline="Inconclusive: no Content Credentials in the file; most photos carry none.")
+        edited = sorted({a["action"] for a in cred.actions if a["action"] in EDITS})
+        summary, score = _summary(cred, edited)
+        summary += _ingredients_text(cred) + (_beside(side, side_error) if own is not None else "")
+        details.update(credentials=asdict(cred), edits=edited)
+        if own is not None and side is not None:
+            details["sidecar_credentials"] = asdict(side)
+        headline = _headline(cred, edited)
+        if score is None:
+            return DetectorResult(Status.INCONCLUSIVE, f"Inconclusive: {summary}", details=details, headline=headline)
+        return DetectorResult(Status.OK, summary, score=score, details=details, headline=headline)
+
+    def report_section(self, finding: DetectorFinding, evidence: Evidence) -> ReportSection | None:
+        """The manifest chain, its signers and actions; the generic section when the file carries none."""
+        if "credentials" not in finding.details:
+            return None
+        from .section import report_section
+
+        return report_section(finding, evidence)

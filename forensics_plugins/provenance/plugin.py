@@ -1,37 +1,12 @@
-"""Hook implementations of the provenance plugin (entry point ``provenance``)."""
+"""The provenance plugin (entry point ``provenance``): registers :class:`.detector.Provenance`; its module is imported only when the detectors are needed."""
 
 from __future__ import annotations
 
-import importlib
-
 from forensics_core import hookimpl
 
-from .spec import NAME, SPEC
-
 
 @hookimpl
-def forensics_register_detectors():
-    return [SPEC]
+def forensics_register_detectors(register):
+    from .detector import Provenance
 
-
-@hookimpl
-def forensics_prepare():
-    importlib.import_module(f"{__package__}.detector")
-
-
-@hookimpl
-def forensics_analyze(detector, evidence, params):
-    if detector != NAME:
-        return None
-    from .detector import analyse
-
-    return analyse(evidence, params)
-
-
-@hookimpl
-def forensics_report_section(finding, evidence):
-    if finding.name != NAME or "credentials" not in finding.details:
-        return None
-    from .section import report_section
-
-    return report_section(finding, evidence)
+    register(Provenance())

@@ -260,8 +260,9 @@ def test_a_headline_is_one_short_sentence():
     from forensics_core.findings import DetectorFinding, Status
     from forensics_core.report.wording import row_sentence
 
-    finding = DetectorFinding("d", "1", "p", Status.OK, "Regions at x 10-20 differ (p = 0.001). More text\nhere.",
-                              None, None, None, {}, {}, 0.1)
+    finding = DetectorFinding(name="d", version="1", plugin="p", status=Status.OK,
+                              summary="Regions at x 10-20 differ (p = 0.001). More text\nhere.", score=None,
+                              p_value=None, nfa=None, details={}, parameters={}, elapsed_s=0.1)
     assert row_sentence(finding) == "Regions at x 10-20 differ (p = 0.001)."
     assert row_sentence(replace(finding, headline="  A grid\nat x 10. ")) == "A grid at x 10."
     long = replace(finding, headline="word " * 40, summary="e.g. " + "many " * 40 + "words.")

@@ -194,7 +194,8 @@ def test_the_likelihood_ratio_policy_labels_by_fixed_thresholds(log10_lr, label)
     from forensics_core.findings import DetectorFinding, LikelihoodRatio, Status
     from forensics_core.fusion import likelihood_ratio
 
-    finding = DetectorFinding("a", "1", "p", Status.OK, "s", None, 1e-6, None, {}, {}, 0.1)
+    finding = DetectorFinding(name="a", version="1", plugin="p", status=Status.OK, summary="s", score=None,
+                              p_value=1e-6, nfa=None, details={}, parameters={}, elapsed_s=0.1)
     verdict = likelihood_ratio([finding])
     assert verdict.label.value == "inconclusive" and "1/100" in verdict.method
     verdict.likelihood_ratio = LikelihoodRatio(hp="h", hd="d", log10_lr=log10_lr, contributed=["a"],

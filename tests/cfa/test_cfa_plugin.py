@@ -47,8 +47,7 @@ def test_section_of_a_spliced_photo(host, tmp_path):
     img = Image.open(io.BytesIO(section.files["cfa-map.png"][0]))
     assert max(img.size) <= MAP_MAX_SIDE
 
-    impl = host.implementation("forensics_localize", "cfa")
-    mask = impl(finding=finding, shape=spliced.mask.shape)
+    mask = host.detectors["cfa"].detector.localize(finding, spliced.mask.shape)
     iou = (mask & spliced.mask).sum() / (mask | spliced.mask).sum()
     print(f"localisation of a 20% region: IoU {iou:.2f}")
     assert iou > 0.5
@@ -73,8 +72,7 @@ def test_palette_photo(host, tmp_path):
 
 
 def test_synthetic_cases_are_deterministic_and_tagged(host):
-    impl = host.implementation("forensics_synthetic_cases", "cfa")
-    a = list(impl(seed=3, count=2))
+    a = list(host.detectors["cfa"].detector.synthetic_cases(3, 2))
     b = list(synth.synthetic_cases(3, 2))
     assert len(a) == 4 and all(isinstance(c, SyntheticCase) for c in a)
     assert [c.data for c in a] == [c.data for c in b]

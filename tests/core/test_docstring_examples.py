@@ -1,6 +1,7 @@
 """The Examples sections of the main public functions run as written (from the repository's root)."""
 
 import doctest
+import importlib
 import os
 from pathlib import Path
 
@@ -14,9 +15,14 @@ import forensics_core.verify
 
 ROOT = Path(__file__).resolve().parents[2]
 
+NUMERICAL = [f"forensics_plugins.lens_distortion.{m}" for m in ("edges", "lines", "k1", "consistency", "regions")]
+DETECTORS = [f"forensics_plugins.{p}.detector" for p in ("cfa", "copy_move", "dq", "jpeg_grid", "lens_distortion",
+                                                          "metadata", "noise", "provenance")]
+
 
 @pytest.mark.parametrize("module", [forensics_core.analysis, forensics_core.evidence, forensics_core.report.images,
-                                    forensics_core.contracts, forensics_core.verify], ids=lambda m: m.__name__)
+                                    forensics_core.contracts, forensics_core.verify]
+                         + [importlib.import_module(m) for m in NUMERICAL + DETECTORS], ids=lambda m: m.__name__)
 def test_examples_run(module, monkeypatch):
     monkeypatch.chdir(ROOT)
     assert os.path.isfile("tests/data/calibration/left01.jpg")

@@ -32,18 +32,22 @@ def forensics(site: Path, *args):
                           capture_output=True, text=True, env=env, timeout=300)
 
 
-def test_example_plugin_is_discovered_runs_and_reaches_findings(site, photo, tmp_path, validate):
+def test_example_plugin_is_discovered_runs_and_reaches_findings_and_the_report(site, photo, tmp_path, validate):
     listed = json.loads(forensics(site, "plugins", "--json").stdout)
     plugins = {p["name"]: p for p in listed["plugins"]}
-    assert plugins["noise_level"]["status"] == "loaded"
+    assert plugins["noise_level"]["status"] == "loaded", plugins["noise_level"]["error"]
     assert plugins["noise_level"]["distribution"] == "forensics-plugin-example"
-    assert set(plugins["noise_level"]["hooks"]) >= {"forensics_analyze", "forensics_register_detectors"}
+    assert plugins["noise_level"]["hooks"] == ["forensics_register_detectors"]
+    assert plugins["noise_level"]["detectors"] == ["noise_level"]
 
     out = forensics(site, "analyze", photo, "--out", tmp_path, "--detectors", "noise_level",
-                    "--param", "noise_level.block=64")
+                    "--param", "noise_level.block=64", "--format", "json,html")
     assert out.returncode == 0, out.stderr
     doc = validate(json.loads((tmp_path / "left01" / "findings.json").read_text()))
     finding = doc["detectors"][0]
     assert finding["name"] == "noise_level" and finding["status"] == "ok"
     assert finding["plugin"] == "noise_level" and finding["parameters"] == {"block": 64}
     assert 0.0 < finding["details"]["sigma"] < 20.0
+    html = (tmp_path / "left01" / "report.html").read_text()
+    assert "Noise level" in html and "measured in 64-pixel blocks" in html
+    assert finding["headline"] in html

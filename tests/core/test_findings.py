@@ -51,8 +51,9 @@ def test_the_radial_distortion_contract_reads_only_a_complete_record_of_an_ok_fi
                              n_lines_informative=31)
 
     def finding(details, status=Status.OK):
-        return DetectorFinding("lens_distortion", "1", "lens_distortion", status, "s", None, None, None, details, {},
-                               0.1)
+        return DetectorFinding(name="lens_distortion", version="1", plugin="lens_distortion", status=status,
+                               summary="s", score=None, p_value=None, nfa=None, details=details, parameters={},
+                               elapsed_s=0.1)
 
     assert RadialDistortion.from_finding(finding({RADIAL_DISTORTION_KEY: model.to_details()})) == model
     assert RadialDistortion.from_finding(finding({RADIAL_DISTORTION_KEY: model.to_details()},

@@ -12,7 +12,8 @@ from forensics_core.report import wording
 
 
 def finding(name, status=Status.OK, p=None, nfa=None):
-    return DetectorFinding(name, "1", "test", status, "s", None, p, nfa, {}, {}, 0.0)
+    return DetectorFinding(name=name, version="1", plugin="test", status=status, summary="s", score=None,
+                           p_value=p, nfa=nfa, details={}, parameters={}, elapsed_s=0.0)
 
 
 def roles(verdict):

@@ -37,16 +37,23 @@ def test_allow_and_deny_lists_from_the_environment(monkeypatch):
     assert PluginHost.from_entry_points().detectors == {}
 
 
-def test_a_plugin_is_prepared_once_in_the_main_process_just_before_its_first_detector(photo):
+def test_detectors_are_registered_once_in_the_main_process_when_first_needed(photo):
     import fixture_plugins
 
-    fixture_plugins.PREPARED.clear()
-    host = fixture_host("good", "preparing")
-    analyze(photo, ["good"], host=host)
-    assert fixture_plugins.PREPARED == []
-    first = by_name(analyze(photo, ["good", "preparing"], host=host, jobs=2))["preparing"]
-    again = by_name(analyze(photo, ["preparing"], host=host))["preparing"]
-    assert first.details["prepared"] == again.details["prepared"] == [os.getpid()]
+    fixture_plugins.REGISTERED.clear()
+    host = fixture_host("good", "registering")
+    assert fixture_plugins.REGISTERED == []
+    first = by_name(analyze(photo, ["good", "registering"], host=host, jobs=2))["registering"]
+    again = by_name(analyze(photo, ["registering"], host=host))["registering"]
+    assert first.details["registered"] == again.details["registered"] == [os.getpid()]
+
+
+def test_the_core_calls_the_detector_object_it_registered(photo):
+    host = fixture_host("good")
+    import fixture_plugins
+
+    assert host.detectors["good"].detector is fixture_plugins.good
+    assert host.detectors["good"].plugin == "good"
 
 
 def test_a_raising_detector_is_recorded_and_the_others_survive(photo):
@@ -96,7 +103,7 @@ def test_a_detector_cannot_write_to_the_evidence(photo):
 
 
 def test_broken_plugins_are_recorded_not_fatal(photo, validate):
-    host = fixture_host("good", "bad_registration", "typo", "wrong_args")
+    host = fixture_host("good", "bad_registration", "typo", "wrong_args", "not_a_detector", "two_names")
     host.load_entry_point(EntryPoint("broken", "broken_import_plugin", ENTRY_POINT_GROUP))
     host.load_entry_point(EntryPoint("missing", "no_such_module_anywhere:plugin", ENTRY_POINT_GROUP))
     records = host.records
@@ -105,11 +112,24 @@ def test_broken_plugins_are_recorded_not_fatal(photo, validate):
     assert "cannot register" in records["bad_registration"].error
     assert "unknown hook(s) forensics_analyse" in records["typo"].error
     assert "invalid hooks" in records["wrong_args"].error
+    assert "takes a forensics_core.Detector, not DetectorSpec" in records["not_a_detector"].error
+    assert "already provided" in records["two_names"].error and records["two_names"].detectors == []
     assert records["good"].status == "loaded"
     result = analyze(photo, host=host, timeout=30)
     doc = validate(result)
     assert {p["name"]: p["status"] for p in doc["plugins"]}["broken"] == "error"
     assert by_name(result)["good"].status is Status.OK
+
+
+def test_a_plugin_written_for_api_1_fails_to_load_saying_what_to_change():
+    host = fixture_host("api_one", "api_one_specs", "good")
+    old = host.records["api_one"]
+    assert old.status == "error"
+    assert "written for plugin API 1: forensics_analyze is now Detector.analyze" in old.error
+    assert "forensics_register_detectors(register)" in old.error
+    specs = host.records["api_one_specs"]
+    assert specs.status == "error" and "register(detector)" in specs.error
+    assert set(host.detectors) == {"good"}
 
 
 def test_detector_name_clash_is_a_load_error():
@@ -135,6 +155,22 @@ def test_a_failing_fusion_plugin_does_not_spoil_another_policys_verdict(photo):
                                    "RuntimeError: fusion broke.")
 
 
+def test_forensics_fuse_is_called_through_pluggy_and_its_first_result_decides(photo):
+    import fixture_plugins
+
+    fixture_plugins.FUSED.clear()
+    late = analyze(photo, host=fixture_host("good", "early_fusion", "late_fusion"), fusion="first").verdict
+    assert late.explanation == "Decided by late_fusion."
+    assert fixture_plugins.FUSED == ["late_fusion"]
+    fixture_plugins.FUSED.clear()
+    first = analyze(photo, host=fixture_host("good", "early_fusion", "first_fusion", "late_fusion"),
+                    fusion="first").verdict
+    assert first.explanation == "Decided by first_fusion." and fixture_plugins.FUSED == ["first_fusion"]
+    fixture_plugins.FUSED.clear()
+    builtin = analyze(photo, host=fixture_host("good", "late_fusion", "raising_fusion")).verdict
+    assert builtin.policy == "bonferroni" and fixture_plugins.FUSED == ["late_fusion"]
+
+
 def test_extra_metadata_hook(photo):
     result = analyze(photo, host=fixture_host("metadata", "good"))
     assert result.evidence.extra_metadata["metadata"] == {"bytes": photo.stat().st_size}
@@ -147,7 +183,8 @@ def test_plugins_command_lists_status_and_errors(monkeypatch):
     assert payload["entry_point_group"] == ENTRY_POINT_GROUP
     names = {p["name"]: p for p in payload["plugins"]}
     assert names["lens_distortion"]["status"] == "loaded"
-    assert "forensics_analyze" in names["lens_distortion"]["hooks"]
+    assert names["lens_distortion"]["hooks"] == ["forensics_register_commands", "forensics_register_detectors"]
+    assert names["lens_distortion"]["detectors"] == ["lens_distortion"]
     table = CliRunner().invoke(cli, ["plugins"])
     assert table.exit_code == 0 and "lens_distortion" in table.output
 

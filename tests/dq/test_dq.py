@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from forensics_core import Status, load_evidence
-from forensics_plugins.dq.detector import analyse, regions_mask
+from forensics_plugins.dq.detector import DoubleQuantisation, regions_mask
 from forensics_plugins.dq.spec import DEFAULT_PARAMS
 from forensics_plugins.dq.synth import decode, encode, paste, scene, synthetic_cases
 
@@ -18,7 +18,7 @@ def _evidence(tmp_path, name, data):
 @pytest.fixture(scope="module")
 def results(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("dq")
-    return [(case, analyse(_evidence(tmp, case.name + case.suffix, case.data), DEFAULT_PARAMS))
+    return [(case, DoubleQuantisation().analyze(_evidence(tmp, case.name + case.suffix, case.data), DEFAULT_PARAMS))
             for case in synthetic_cases(3, 8)]
 
 
@@ -52,8 +52,8 @@ def test_same_photo_same_findings(tmp_path):
     rng = np.random.default_rng(4)
     spliced, _ = paste(decode(encode(scene(rng, (640, 480)), 75)), rng, "raw")
     data = encode(spliced, 95)
-    a = analyse(_evidence(tmp_path, "a.jpg", data), DEFAULT_PARAMS)
-    b = analyse(_evidence(tmp_path, "b.jpg", data), DEFAULT_PARAMS)
+    a = DoubleQuantisation().analyze(_evidence(tmp_path, "a.jpg", data), DEFAULT_PARAMS)
+    b = DoubleQuantisation().analyze(_evidence(tmp_path, "b.jpg", data), DEFAULT_PARAMS)
     a.details.pop("elapsed_s"), b.details.pop("elapsed_s")
     assert (a.score, a.details) == (b.score, b.details)
 

@@ -11,7 +11,7 @@ from scipy import ndimage
 from forensics_core import DetectorFinding, EvidenceError, Processing, Status, load_evidence
 from forensics_core.findings import check_result
 from forensics_plugins.jpeg_grid import synth
-from forensics_plugins.jpeg_grid.detector import analyse, ijg_quality
+from forensics_plugins.jpeg_grid.detector import JpegGrid, ijg_quality
 from forensics_plugins.jpeg_grid.spec import DEFAULT_PARAMS
 from forensics_plugins.jpeg_grid.figures import tiles_mask
 from forensics_plugins.jpeg_grid.luminance import luminance
@@ -44,7 +44,7 @@ def scene():
 
 def test_single_compression_main_grid_at_origin_and_no_region(tmp_path, scene):
     ev = load_evidence(_file(tmp_path, "a.jpg", synth.jpeg_bytes(scene, 85)))
-    result = check_result(analyse(ev, DEFAULT_PARAMS))
+    result = check_result(JpegGrid().analyze(ev, DEFAULT_PARAMS))
     d = result.details
     assert result.status is Status.OK, result.summary
     assert d["main_grid"]["origin"] == [0, 0] and d["main_grid"]["log10_nfa"] < -100
@@ -59,7 +59,7 @@ def test_crop_moves_the_main_grid_and_is_reported_but_not_a_splice(tmp_path, sce
     decoded = synth.decode_cropped(synth.jpeg_bytes(scene, 80))
     buf = io.BytesIO()
     Image.fromarray(decoded[5:, 3:]).save(buf, format="PNG")
-    result = analyse(load_evidence(_file(tmp_path, "c.png", buf.getvalue())), DEFAULT_PARAMS)
+    result = JpegGrid().analyze(load_evidence(_file(tmp_path, "c.png", buf.getvalue())), DEFAULT_PARAMS)
     d = result.details
     assert result.status is Status.OK
     assert d["main_grid"]["origin"] == [5, 3] and d["cropped"] and d["lattice"]["origin"] == [5, 3]
@@ -73,7 +73,7 @@ def test_crop_saved_again_as_jpeg_does_not_make_the_files_own_grid_foreign(tmp_p
     # file's own grid (0, 0), which every pixel went through, outvotes it over much of the frame.
     scene = synth.render_scene(np.random.default_rng(1), (600, 800), synth.SOURCES[1])
     cropped = synth.decode_cropped(synth.jpeg_bytes(scene, 76))[5:, 3:]
-    result = check_result(analyse(load_evidence(_file(tmp_path, "r.jpg", _jpeg(cropped, quality=98))),
+    result = check_result(JpegGrid().analyze(load_evidence(_file(tmp_path, "r.jpg", _jpeg(cropped, quality=98))),
                                   DEFAULT_PARAMS))
     d = result.details
     assert result.status is Status.OK and d["main_grid"]["origin"] == [5, 3] and d["cropped"]
@@ -84,7 +84,7 @@ def test_crop_saved_again_as_jpeg_does_not_make_the_files_own_grid_foreign(tmp_p
 def test_region_on_a_shifted_grid_is_found(tmp_path, kind, final_quality):
     case = synth.make_spliced(21, kind, size=(384, 512), quality=85, paste_quality=80, final_quality=final_quality,
                               shift=(3, 6))
-    result = check_result(analyse(load_evidence(_file(tmp_path, "s.jpg", case.data)), DEFAULT_PARAMS))
+    result = check_result(JpegGrid().analyze(load_evidence(_file(tmp_path, "s.jpg", case.data)), DEFAULT_PARAMS))
     d = result.details
     hits = [r for r in d["regions"] if r["meaningful"]]
     assert result.status is Status.OK and hits, result.summary
@@ -100,8 +100,8 @@ def test_region_on_a_shifted_grid_is_found(tmp_path, kind, final_quality):
 def test_region_missing_the_main_grid_is_found(tmp_path, method):
     case = synth.make_uncompressed_paste(4, size=(384, 512), quality=85)
     ev = load_evidence(_file(tmp_path, "m.png", case.data))
-    assert not any(r["meaningful"] for r in analyse(ev, {**DEFAULT_PARAMS, "missing_grid": False}).details["regions"])
-    result = check_result(analyse(ev, {**DEFAULT_PARAMS, "missing_method": method}))
+    assert not any(r["meaningful"] for r in JpegGrid().analyze(ev, {**DEFAULT_PARAMS, "missing_grid": False}).details["regions"])
+    result = check_result(JpegGrid().analyze(ev, {**DEFAULT_PARAMS, "missing_method": method}))
     assert result.details["missing_tested"]
     hits = [r for r in result.details["regions"] if r["meaningful"]]
     assert result.status is Status.OK and hits, result.summary
@@ -111,7 +111,7 @@ def test_region_missing_the_main_grid_is_found(tmp_path, method):
 
 def test_never_compressed_is_inconclusive_not_clean(tmp_path):
     data, _ = synth.make_never_compressed(2, size=SIZE)
-    result = check_result(analyse(load_evidence(_file(tmp_path, "n.png", data)), DEFAULT_PARAMS))
+    result = check_result(JpegGrid().analyze(load_evidence(_file(tmp_path, "n.png", data)), DEFAULT_PARAMS))
     assert result.status is Status.INCONCLUSIVE
     assert result.score is None and result.nfa is None and result.p_value is None
     assert "never JPEG-compressed" in result.summary
@@ -145,7 +145,7 @@ def test_jpeg_piece_pasted_into_a_never_compressed_image_is_a_foreign_region(tmp
     mask[101:165, 363:459] = True
     forged = host.copy()
     forged[mask] = piece[96:160, 160:256].reshape(-1, 3)
-    result = check_result(analyse(load_evidence(_file(tmp_path, "p.png", _png(forged))), DEFAULT_PARAMS))
+    result = check_result(JpegGrid().analyze(load_evidence(_file(tmp_path, "p.png", _png(forged))), DEFAULT_PARAMS))
     d = result.details
     hits = [r for r in d["regions"] if r["meaningful"]]
     assert result.status is Status.OK and hits, result.summary
@@ -168,7 +168,7 @@ def test_flat_sky_and_saturated_areas_give_no_region(tmp_path, quality):
     grey[:60] = 255
     grey[(yy > 0.8 * h) & (xx < 0.4 * w)] = 0             # crushed shadows
     grey[(yy > 0.5 * h) & (xx > 0.75 * w)] = 255           # blown highlight
-    result = check_result(analyse(load_evidence(_file(tmp_path, "s.jpg", _jpeg(_rgb(grey, rng), quality=quality))),
+    result = check_result(JpegGrid().analyze(load_evidence(_file(tmp_path, "s.jpg", _jpeg(_rgb(grey, rng), quality=quality))),
                                   DEFAULT_PARAMS))
     d = result.details
     assert result.status is Status.OK and d["main_grid"]["origin"] == [0, 0]
@@ -179,8 +179,8 @@ def test_flat_sky_and_saturated_areas_give_no_region(tmp_path, quality):
 def test_same_input_same_result(tmp_path):
     case = synth.make_spliced(5, "splice", size=SIZE, final_quality=97)
     ev = load_evidence(_file(tmp_path, "d.jpg", case.data))
-    first = check_result(analyse(ev, DEFAULT_PARAMS))
-    second = check_result(analyse(ev, DEFAULT_PARAMS))
+    first = check_result(JpegGrid().analyze(ev, DEFAULT_PARAMS))
+    second = check_result(JpegGrid().analyze(ev, DEFAULT_PARAMS))
     strip = lambda d: {k: v for k, v in d.items() if k != "elapsed_s"}  # noqa: E731
     assert json.dumps(strip(first.details), sort_keys=True) == json.dumps(strip(second.details), sort_keys=True)
     assert (first.status, first.summary, first.nfa) == (second.status, second.summary, second.nfa)
@@ -189,7 +189,7 @@ def test_same_input_same_result(tmp_path):
 def test_pixels_and_bytes_are_left_untouched(tmp_path, scene):
     ev = load_evidence(_file(tmp_path, "u.jpg", synth.jpeg_bytes(scene, 90)))
     before = (ev.pixels.copy(), bytes(ev.data))
-    analyse(ev, DEFAULT_PARAMS)
+    JpegGrid().analyze(ev, DEFAULT_PARAMS)
     assert np.array_equal(ev.pixels, before[0]) and ev.data == before[1]
     assert not ev.pixels.flags.writeable
 
@@ -246,7 +246,7 @@ def test_hostile_inputs_give_a_result_or_a_refused_intake(tmp_path, scene):
         except EvidenceError as exc:
             statuses[name] = f"refused: {exc}"
             continue
-        result = check_result(analyse(ev, DEFAULT_PARAMS))
+        result = check_result(JpegGrid().analyze(ev, DEFAULT_PARAMS))
         assert result.status in (Status.OK, Status.INCONCLUSIVE, Status.SKIPPED), name
         if result.status is not Status.OK:
             assert result.summary.startswith("Inconclusive") and result.score is None, name
@@ -304,7 +304,7 @@ def _pasted_piece_is_found(tmp_path, rng, host: np.ndarray, grid: tuple[int, int
     donor = synth.decode_cropped(synth.jpeg_bytes(synth.render_scene(rng, shape, "coffee"), 80, grid), grid)
     pasted = host.copy()
     pasted[box] = donor[box]
-    spliced = analyse(load_evidence(_file(tmp_path, "spliced.jpg", synth.jpeg_bytes(pasted, 98))), DEFAULT_PARAMS)
+    spliced = JpegGrid().analyze(load_evidence(_file(tmp_path, "spliced.jpg", synth.jpeg_bytes(pasted, 98))), DEFAULT_PARAMS)
     foreign = [r for r in spliced.details["regions"] if r["meaningful"]]
     assert foreign and foreign[0]["grid"] == list(grid) and foreign[0]["stage"] == "foreign"
     assert spliced.nfa < 1e-6
@@ -322,14 +322,15 @@ def test_lens_correction_is_named_processing_and_a_piece_pasted_into_it_is_still
     rng = np.random.default_rng(38)
     first = synth.decode_cropped(synth.jpeg_bytes(synth.render_scene(rng, (1200, 1600), "astronaut"), 85))
     corrected = _lens_corrected(first, -0.08)
-    result = analyse(load_evidence(_file(tmp_path, "corrected.jpg", synth.jpeg_bytes(corrected, 98))), DEFAULT_PARAMS)
+    result = JpegGrid().analyze(load_evidence(_file(tmp_path, "corrected.jpg", synth.jpeg_bytes(corrected, 98))), DEFAULT_PARAMS)
     processing = result.details["processing"]
     assert processing and processing["kind"] == "radial resampling" and processing["radial"]["n_regions"] >= 2
     assert result.details["n_meaningful"] == 0 and result.nfa == 1.0
     assert "radial warp about its centre" in result.summary and "processing" in result.summary
     check_result(result)
-    finding = DetectorFinding("jpeg_grid", "2", "jpeg_grid", result.status, result.summary, result.score, None,
-                              result.nfa, result.details, {}, 0.0)
+    finding = DetectorFinding(name="jpeg_grid", version="2", plugin="jpeg_grid", status=result.status,
+                              summary=result.summary, score=result.score, p_value=None, nfa=result.nfa,
+                              details=result.details, parameters={}, elapsed_s=0.0)
     assert Processing.from_finding(finding) == Processing(
         "radial resampling", "resampled by a radial warp about its centre after a first JPEG compression, as lens "
         "correction does")
@@ -348,7 +349,7 @@ def test_crop_after_compression_is_named_processing_and_a_piece_pasted_into_it_i
     rng = np.random.default_rng(39)
     first = synth.decode_cropped(synth.jpeg_bytes(synth.render_scene(rng, (900, 1200), synth.SOURCES[0]), 80))
     cropped = np.ascontiguousarray(first[3:, 5:])
-    result = check_result(analyse(load_evidence(_file(tmp_path, "cropped.jpg", synth.jpeg_bytes(cropped, 98))),
+    result = check_result(JpegGrid().analyze(load_evidence(_file(tmp_path, "cropped.jpg", synth.jpeg_bytes(cropped, 98))),
                                   DEFAULT_PARAMS))
     d = result.details
     assert d["main_grid"]["origin"] == [0, 0] and d["processing"]["kind"] == "crop after compression"

@@ -70,7 +70,6 @@ def test_tiny_photo_has_no_section_of_its_own(host, tmp_path):
     assert section_for(host, finding, ev).body is None
 
 
-def test_synthetic_cases_through_the_hook(host):
-    impl = host.implementation("forensics_synthetic_cases", "jpeg_grid")
-    cases = list(impl(seed=1, count=2))
+def test_synthetic_cases_through_the_registered_detector(host):
+    cases = list(host.detectors["jpeg_grid"].detector.synthetic_cases(1, 2))
     assert len(cases) == 4 and sum(c.spliced for c in cases) == 2

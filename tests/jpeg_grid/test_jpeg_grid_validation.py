@@ -25,7 +25,7 @@ import pytest
 
 from forensics_core import Status, load_evidence
 from forensics_plugins.jpeg_grid import synth
-from forensics_plugins.jpeg_grid.detector import analyse
+from forensics_plugins.jpeg_grid.detector import JpegGrid
 from forensics_plugins.jpeg_grid.spec import DEFAULT_PARAMS
 from forensics_plugins.jpeg_grid.figures import tiles_mask
 
@@ -44,7 +44,7 @@ N_MISSING = 10
 def _analyse(tmp_path, name, data, suffix=".jpg", **params):
     path = tmp_path / f"{name}{suffix}"
     path.write_bytes(data)
-    return analyse(load_evidence(path), {**DEFAULT_PARAMS, **params})
+    return JpegGrid().analyze(load_evidence(path), {**DEFAULT_PARAMS, **params})
 
 
 def _best_iou(result, truth):

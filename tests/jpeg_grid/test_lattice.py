@@ -9,7 +9,7 @@ from PIL import Image
 from forensics_core import Status, load_evidence
 from forensics_core.findings import check_result
 from forensics_plugins.jpeg_grid import synth
-from forensics_plugins.jpeg_grid.detector import analyse
+from forensics_plugins.jpeg_grid.detector import JpegGrid
 from forensics_plugins.jpeg_grid.spec import DEFAULT_PARAMS
 from forensics_plugins.jpeg_grid.lattice import block_coefficients, estimate_steps
 from forensics_plugins.jpeg_grid.luminance import luminance
@@ -45,7 +45,7 @@ def _pasted(base, seed):
 def _analyse(tmp_path, name, data):
     path = tmp_path / name
     path.write_bytes(data)
-    return check_result(analyse(load_evidence(path), DEFAULT_PARAMS))
+    return check_result(JpegGrid().analyze(load_evidence(path), DEFAULT_PARAMS))
 
 
 def _hit_overlaps(result, mask):
@@ -105,7 +105,7 @@ def test_zero_own_missing_grid_test_stays_available(tmp_path):
     case = synth.make_uncompressed_paste(4, size=SIZE, quality=85)
     path = tmp_path / "m.png"
     path.write_bytes(case.data)
-    result = check_result(analyse(load_evidence(path), {**DEFAULT_PARAMS, "missing_method": "zero_q99"}))
+    result = check_result(JpegGrid().analyze(load_evidence(path), {**DEFAULT_PARAMS, "missing_method": "zero_q99"}))
     assert result.details["missing_tested"] and "lattice" not in result.details
     assert any(r["meaningful"] and r["stage"] == "missing" for r in result.details["regions"])
 

@@ -101,8 +101,8 @@ def test_region_p_value_is_valid_under_the_real_photo_null():
         directions = rng.choice([0.0, np.pi / 2], m) + rng.normal(0.0, 0.1, m)
         se = rng.uniform(0.005, 0.03, m)
         delta = se * rng.standard_t(DOF, m)
-        result = region_test(mid, directions, np.ones(m, dtype=bool), delta, se, 0.1, np.zeros(2),
-                             np.array([1.0, 0.75]), DOF)
+        result = region_test(mid, directions, np.ones(m, dtype=bool), delta, se, k1=0.1, centre=np.zeros(2),
+                             half_extent=np.array([1.0, 0.75]), dof=DOF)
         p.append(1.0 if result is None else result.image_p_value)
     p = np.array(p)
     print(f"\nP(p <= 0.1) = {np.mean(p <= 0.1):.3f}, P(p <= 0.01) = {np.mean(p <= 0.01):.3f} over {p.size}")
@@ -132,6 +132,6 @@ def test_a_line_through_the_centre_of_distortion_keeps_the_test_finite():
     mid = np.array([[0.0, 0.0], [0.1, 0.2], [0.2, -0.1], [0.3, 0.1]])
     directions = np.array([0.0, np.pi / 2, 0.1, np.pi / 2 + 0.1])
     with np.errstate(divide="raise", invalid="raise"):
-        result = region_test(mid, directions, np.ones(4, dtype=bool), np.full(4, 0.1), np.full(4, 0.01), 0.1,
-                             np.zeros(2), np.array([1.0, 0.75]), DOF)
+        result = region_test(mid, directions, np.ones(4, dtype=bool), np.full(4, 0.1), np.full(4, 0.01), k1=0.1,
+                             centre=np.zeros(2), half_extent=np.array([1.0, 0.75]), dof=DOF)
     assert np.isfinite(result.log10_bayes_factor) and 0.0 <= result.p_value <= 1.0

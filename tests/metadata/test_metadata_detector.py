@@ -13,7 +13,7 @@ from forensics_core.findings import check_result
 from forensics_core.plugins import PluginHost
 from forensics_core.report.plugin_sections import section_for
 from forensics_plugins.metadata import plugin
-from forensics_plugins.metadata.detector import analyse
+from forensics_plugins.metadata.detector import Metadata
 from forensics_plugins.metadata.spec import DEFAULT_PARAMS, NAME, SPEC
 from metadata_helpers import (
     camera_thumbnail,
@@ -31,7 +31,7 @@ CAMERA = dict(make="Canon", model="Canon PowerShot SX60 HS", software=None, date
 
 
 def _run(evidence, prior=None, **params):
-    result = analyse(evidence, {**DEFAULT_PARAMS, **params}, prior or {})
+    result = Metadata().analyze(evidence, {**DEFAULT_PARAMS, **params}, prior or {})
     check_result(result)  # JSON-serialisable, score in range, no NaN
     return result, {c["id"]: c for c in result.details["checks"]}
 
@@ -43,12 +43,13 @@ def _camera_file(tmp_path, img=None, thumb_img=None, **overrides):
     return evidence_from(jpeg(img, block), tmp_path)
 
 
-def test_spec_and_hooks():
-    assert plugin.forensics_register_detectors() == [SPEC]
+def test_spec_and_registration():
+    registered = []
+    plugin.forensics_register_detectors(registered.append)
+    assert [type(d) for d in registered] == [Metadata] and registered[0].spec == SPEC
     assert SPEC.uses == ("lens_distortion",) and SPEC.version == "1.2.0"
     assert json.dumps(SPEC.default_params)
     assert any("CC BY-SA 3.0" in ref for ref in SPEC.references)
-    assert plugin.forensics_analyze("lens_distortion", None, {}, {}) is None
 
 
 def test_plain_camera_file(tmp_path):
@@ -258,9 +259,9 @@ def test_report_section_with_the_lens_comparison(data_dir):
 def test_no_section_without_details():
     from forensics_core import DetectorFinding
 
-    failed = DetectorFinding(NAME, "1.0.0", "metadata", Status.ERROR, "failed", None, None, None, {}, {}, 0.0,
-                             error="x")
-    assert plugin.forensics_report_section(failed, None) is None
+    failed = DetectorFinding(name=NAME, version="1.0.0", plugin="metadata", status=Status.ERROR, summary="failed",
+                             score=None, p_value=None, nfa=None, details={}, parameters={}, elapsed_s=0.0, error="x")
+    assert Metadata().report_section(failed, None) is None
 
 
 def test_what_pillow_tolerates_in_the_exif_is_noted_not_printed(tmp_path):

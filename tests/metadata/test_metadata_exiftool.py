@@ -6,7 +6,7 @@ import subprocess
 import pytest
 
 from forensics_core import EvidenceError, exiftool, load_evidence
-from forensics_plugins.metadata.detector import analyse
+from forensics_plugins.metadata.detector import Metadata
 from forensics_plugins.metadata.spec import DEFAULT_PARAMS
 from metadata_helpers import evidence_from, exif_bytes, jpeg, photo
 
@@ -26,7 +26,7 @@ def no_exiftool(monkeypatch, tmp_path):
 
 
 def _checks(evidence):
-    return {c["id"]: c for c in analyse(evidence, DEFAULT_PARAMS, {}).details["checks"]}
+    return {c["id"]: c for c in Metadata().analyze(evidence, DEFAULT_PARAMS, {}).details["checks"]}
 
 
 def _installed_version() -> str:

@@ -139,8 +139,9 @@ def _lens_finding(k1=None, se=0.005, status=Status.OK, k2_stderr=0.01):
     model = None if k1 is None else RadialDistortion(
         k1=k1, k1_stderr=se, k2=0.0, k2_stderr=k2_stderr, cx=0.0, cx_stderr=0.01, cy=0.0, cy_stderr=0.01, cx_px=0.0,
         cy_px=0.0, sigma_px=0.3, n_lines_explained=20, n_lines_informative=20).to_details()
-    return DetectorFinding("lens_distortion", "0.1.0", "lens_distortion", status, "s", None, None, None,
-                           {RADIAL_DISTORTION_KEY: model}, {}, 0.1)
+    return DetectorFinding(name="lens_distortion", version="0.1.0", plugin="lens_distortion", status=status,
+                           summary="s", score=None, p_value=None, nfa=None,
+                           details={RADIAL_DISTORTION_KEY: model}, parameters={}, elapsed_s=0.1)
 
 
 def _d70s_info(**extra):

@@ -133,8 +133,9 @@ def test_lens_comparison_on_rendered_photos():
         synth = render_authentic(seed + 11, size=size, k1=truth.k1, k2=truth.k2, jpeg_quality=92)
         luma = np.asarray(Image.open(io.BytesIO(synth.jpeg_bytes)).convert("L"), dtype=np.float64) / 255
         measured = lens_analyse(luma, LENS_PARAMS)
-        finding = DetectorFinding("lens_distortion", "0.1.0", "lens_distortion", measured.status, measured.summary,
-                                  None, None, None, measured.details, {}, 0.0)
+        finding = DetectorFinding(name="lens_distortion", version="0.1.0", plugin="lens_distortion",
+                                  status=measured.status, summary=measured.summary, score=None, p_value=None,
+                                  nfa=None, details=measured.details, parameters={}, elapsed_s=0.0)
         good = compare(_info(camera, lens_text, focal, size), finding, False, tol, alpha, 64)
         bad = compare(_info(camera, lens_text, WRONG_FOCAL[focal], size), finding, False, tol, alpha, 64)
         matched.append(good.outcome)

@@ -32,12 +32,12 @@ def test_no_xmp_or_not_an_image():
 
 
 def test_an_editor_in_the_xmp_is_flagged(tmp_path):
-    from forensics_plugins.metadata.detector import analyse
+    from forensics_plugins.metadata.detector import Metadata
     from forensics_plugins.metadata.spec import DEFAULT_PARAMS
     from metadata_helpers import evidence_from
 
     evidence = evidence_from(jpeg(photo(), exif_bytes(make="Canon", software="Ver.1.00"), xmp=PACKET), tmp_path)
-    checks = {c["id"]: c for c in analyse(evidence, DEFAULT_PARAMS, {}).details["checks"]}
+    checks = {c["id"]: c for c in Metadata().analyze(evidence, DEFAULT_PARAMS, {}).details["checks"]}
     assert checks["software"]["outcome"] == "suspicious" and "CreatorTool" in checks["software"]["observation"]
 
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from forensics_core import Status, load_evidence
-from forensics_plugins.noise.detector import analyse, regions_mask
+from forensics_plugins.noise.detector import NoiseLevel, regions_mask
 from forensics_plugins.noise.spec import DEFAULT_PARAMS
 from forensics_plugins.noise.synth import encode, paste, scene, synthetic_cases
 
@@ -24,7 +24,7 @@ def _best_share(result, mask):
 @pytest.fixture(scope="module")
 def results(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("noise")
-    return [(case, analyse(_evidence(tmp, case.name + case.suffix, case.data), DEFAULT_PARAMS))
+    return [(case, NoiseLevel().analyze(_evidence(tmp, case.name + case.suffix, case.data), DEFAULT_PARAMS))
             for case in synthetic_cases(3, 6)]
 
 
@@ -73,7 +73,7 @@ def test_a_flat_sky_above_texture_with_one_grain_is_not_listed(tmp_path):
     field = cv2.GaussianBlur(rng.normal(0, 1, (h - h // 2, w)).astype(np.float32), (0, 0), 2.0)
     img[h // 2:] = 110 + 40 * field / field.std()
     img += rng.normal(0, 3.0, img.shape).astype(np.float32)
-    r = analyse(_evidence(tmp_path, "sky.jpg", encode(np.clip(img, 8, 247), 90)), DEFAULT_PARAMS)
+    r = NoiseLevel().analyze(_evidence(tmp_path, "sky.jpg", encode(np.clip(img, 8, 247), 90)), DEFAULT_PARAMS)
     # Measured: best deviation 2.45, nothing listed.
     assert r.status is Status.OK and r.details["windows"] == [], r.details["best"]
     assert abs(r.details["best"]["deviation"]) < 4
@@ -81,7 +81,7 @@ def test_a_flat_sky_above_texture_with_one_grain_is_not_listed(tmp_path):
 
 def test_a_tiny_photo_is_inconclusive_with_the_reason(tmp_path):
     rng = np.random.default_rng(1)
-    r = analyse(_evidence(tmp_path, "tiny.jpg", encode(scene(rng, (64, 64), 3.0), 90)), DEFAULT_PARAMS)
+    r = NoiseLevel().analyze(_evidence(tmp_path, "tiny.jpg", encode(scene(rng, (64, 64), 3.0), 90)), DEFAULT_PARAMS)
     assert r.status is Status.INCONCLUSIVE and r.score is None and r.p_value is None
     assert r.details["valid_blocks"] == 64 and "256 are needed" in r.summary, r.summary
 
@@ -92,7 +92,7 @@ def test_a_picture_without_any_grain_is_inconclusive(tmp_path):
     flat = np.full((400, 600), 128, np.uint8)
     flat[:, :300] = 255
     Image.fromarray(flat).save(tmp_path / "flat.png")
-    r = analyse(load_evidence(tmp_path / "flat.png"), DEFAULT_PARAMS)
+    r = NoiseLevel().analyze(load_evidence(tmp_path / "flat.png"), DEFAULT_PARAMS)
     assert r.status is Status.INCONCLUSIVE and r.score is None and "no noise to compare" in r.summary, r.summary
 
 
@@ -100,8 +100,8 @@ def test_same_photo_same_findings(tmp_path):
     rng = np.random.default_rng(4)
     spliced, _ = paste(scene(rng, (640, 480), 3.0), rng, "noisier", 3.0)
     data = encode(spliced, 90)
-    a = analyse(_evidence(tmp_path, "a.jpg", data), DEFAULT_PARAMS)
-    b = analyse(_evidence(tmp_path, "b.jpg", data), DEFAULT_PARAMS)
+    a = NoiseLevel().analyze(_evidence(tmp_path, "a.jpg", data), DEFAULT_PARAMS)
+    b = NoiseLevel().analyze(_evidence(tmp_path, "b.jpg", data), DEFAULT_PARAMS)
     a.details.pop("elapsed_s"), b.details.pop("elapsed_s")
     assert (a.score, a.details) == (b.score, b.details)
 

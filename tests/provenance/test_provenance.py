@@ -16,7 +16,7 @@ from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 from PIL import Image
 
 from forensics_core import Status, load_evidence
-from forensics_plugins.provenance.detector import analyse
+from forensics_plugins.provenance.detector import Provenance
 from forensics_plugins.provenance.spec import DEFAULT_PARAMS
 
 CAPTURE = "http://cv.iptc.org/newscodes/digitalsourcetype/digitalCapture"
@@ -91,7 +91,7 @@ def _sign(chain, actions, embed=True, parent: bytes | None = None) -> tuple[byte
 def _finding(tmp_path, data, name="photo.jpg", **params):
     path = tmp_path / name
     path.write_bytes(data)
-    return analyse(load_evidence(path), {**DEFAULT_PARAMS, **params})
+    return Provenance().analyze(load_evidence(path), {**DEFAULT_PARAMS, **params})
 
 
 def test_valid_credentials_of_a_capture(tmp_path, chain):

@@ -4,7 +4,7 @@ import io
 
 from PIL import Image
 
-from forensics_core import DetectorResult, DetectorSpec, Status, hookimpl
+from forensics_core import Detector, DetectorResult, DetectorSpec, Status, hookimpl
 from forensics_core.report import Figure, ReportSection
 
 HOSTILE = '<script>alert("x")</script>'
@@ -19,15 +19,20 @@ def png(size=(64, 48), colour=(200, 40, 40)) -> bytes:
     return buf.getvalue()
 
 
-class _Detector:
+class _Detector(Detector):
+    """A fixture plugin that is also the one detector it registers."""
+
     name = "base"
 
-    @hookimpl
-    def forensics_register_detectors(self):
-        return [DetectorSpec(self.name, "2.0", f"Report fixture {self.name}.")]
+    @property
+    def spec(self):
+        return DetectorSpec(self.name, "2.0", f"Report fixture {self.name}.")
 
     @hookimpl
-    def forensics_analyze(self, detector, evidence, params):
+    def forensics_register_detectors(self, register):
+        register(self)
+
+    def analyze(self, evidence, params):
         return DetectorResult(Status.OK, f"{self.name} looked at the photo.", score=0.2, p_value=0.4,
                               details={"lines": [[1, 2], [3, 4]], "note": HOSTILE})
 
@@ -37,8 +42,7 @@ class Sectioned(_Detector):
 
     name = "sectioned"
 
-    @hookimpl
-    def forensics_report_section(self, finding, evidence):
+    def report_section(self, finding, evidence):
         template = ("<p class='fixture-intro'>Lines found: {{ n_lines }}; label {{ label }}.</p>"
                     "<table><tr><th>k1</th><td>{{ '%.3f' | format(k1) }} ± {{ '%.3f' | format(k1_stderr) }}</td></tr></table>"
                     "{{ figures.overlay }}")
@@ -54,16 +58,14 @@ class Sectioned(_Detector):
 class SectionRaising(_Detector):
     name = "section_raising"
 
-    @hookimpl
-    def forensics_report_section(self, finding, evidence):
+    def report_section(self, finding, evidence):
         raise RuntimeError("the section hook broke")
 
 
 class SectionHanging(_Detector):
     name = "section_hanging"
 
-    @hookimpl
-    def forensics_report_section(self, finding, evidence):
+    def report_section(self, finding, evidence):
         import time
 
         time.sleep(3600)
@@ -72,8 +74,7 @@ class SectionHanging(_Detector):
 class SectionExiting(_Detector):
     name = "section_exiting"
 
-    @hookimpl
-    def forensics_report_section(self, finding, evidence):
+    def report_section(self, finding, evidence):
         import os
 
         os._exit(0)
@@ -84,8 +85,7 @@ class SectionTemplateHanging(_Detector):
 
     name = "section_template_hanging"
 
-    @hookimpl
-    def forensics_report_section(self, finding, evidence):
+    def report_section(self, finding, evidence):
         return ReportSection("Endless", "{% for i in range(100000) %}{% for j in range(100000) %}{% endfor %}"
                                         "{% endfor %}")
 
@@ -93,8 +93,7 @@ class SectionTemplateHanging(_Detector):
 class SectionWrongType(_Detector):
     name = "section_wrong_type"
 
-    @hookimpl
-    def forensics_report_section(self, finding, evidence):
+    def report_section(self, finding, evidence):
         return {"title": "not a ReportSection"}
 
 
@@ -103,8 +102,7 @@ class SectionEscapes(_Detector):
 
     name = "section_escapes"
 
-    @hookimpl
-    def forensics_report_section(self, finding, evidence):
+    def report_section(self, finding, evidence):
         return ReportSection("Escaping", "{{ ''.__class__.__mro__[1].__subclasses__() }}")
 
 
@@ -113,8 +111,7 @@ class SectionFetches(_Detector):
 
     name = "section_fetches"
 
-    @hookimpl
-    def forensics_report_section(self, finding, evidence):
+    def report_section(self, finding, evidence):
         template = ('<img src="file:///etc/passwd" alt="passwd">'
                     '<link rel="attachment" href="file:///etc/hostname">'
                     '<a rel="attachment" href="file:///etc/hostname">hostname</a>'

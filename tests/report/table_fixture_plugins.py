@@ -1,6 +1,6 @@
 """Plugins whose report sections carry tables, well formed or not, loaded through real entry points."""
 
-from forensics_core import DetectorResult, DetectorSpec, Status, hookimpl
+from forensics_core import Detector, DetectorResult, DetectorSpec, Status, hookimpl
 from forensics_core.report import ReportSection, Table
 
 FORMULAS = ["=HYPERLINK(\"http://x\")", "+SUM(A1:A2)", "-2+3", "@cmd", "\tlead", "\rlead"]
@@ -10,15 +10,20 @@ NUMBERS = ["-0.0149", "+3", "-1e-05"]
 """Text that is a number, which starts like a formula but must stay as it is."""
 
 
-class _Detector:
+class _Detector(Detector):
+    """A fixture plugin that is also the one detector it registers."""
+
     name = "base"
 
-    @hookimpl
-    def forensics_register_detectors(self):
-        return [DetectorSpec(self.name, "1.0", f"Table fixture {self.name}.")]
+    @property
+    def spec(self):
+        return DetectorSpec(self.name, "1.0", f"Table fixture {self.name}.")
 
     @hookimpl
-    def forensics_analyze(self, detector, evidence, params):
+    def forensics_register_detectors(self, register):
+        register(self)
+
+    def analyze(self, evidence, params):
         return DetectorResult(Status.OK, f"{self.name} measured 3 lines.", score=0.1)
 
 
@@ -27,8 +32,7 @@ class Tabled(_Detector):
 
     name = "tabled"
 
-    @hookimpl
-    def forensics_report_section(self, finding, evidence):
+    def report_section(self, finding, evidence):
         rows = [[1, -0.0149, "consistent", None], [2, 0.5, "kept, with a comma", True]]
         rows += [[3 + i, 0.0, text, False] for i, text in enumerate(FORMULAS + NUMBERS)]
         return ReportSection(
@@ -45,8 +49,7 @@ class TableRagged(_Detector):
 
     name = "table_ragged"
 
-    @hookimpl
-    def forensics_report_section(self, finding, evidence):
+    def report_section(self, finding, evidence):
         return ReportSection("Ragged", "<p>ragged</p>", tables={"lines": Table(["a", "b"], [[1]], "short row")})
 
 
@@ -55,8 +58,7 @@ class TableOfObjects(_Detector):
 
     name = "table_of_objects"
 
-    @hookimpl
-    def forensics_report_section(self, finding, evidence):
+    def report_section(self, finding, evidence):
         return ReportSection("Objects", "<p>objects</p>", tables={"lines": Table(["a"], [[object()]], "")})
 
 

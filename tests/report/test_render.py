@@ -94,7 +94,9 @@ def test_a_row_sentence_keeps_to_25_words():
     from forensics_core.report.wording import row_sentence
 
     long = "word " * 40
-    finding = DetectorFinding("d", "1", "p", Status.OK, long + ". Second sentence.", 0.5, None, None, {}, {}, 0.1)
+    finding = DetectorFinding(name="d", version="1", plugin="p", status=Status.OK,
+                              summary=long + ". Second sentence.", score=0.5, p_value=None, nfa=None, details={},
+                              parameters={}, elapsed_s=0.1)
     assert len(row_sentence(finding).split()) == 25 and row_sentence(finding).endswith("…")
     finding.summary = "Short first sentence. Second sentence."
     assert row_sentence(finding) == "Short first sentence."
@@ -206,7 +208,7 @@ def test_plugin_section_renders_generically_with_escaped_context_and_inline_figu
 
 
 @pytest.mark.parametrize("plugin, reason", [
-    ("section_raising", "its report hook raised RuntimeError: the section hook broke"),
+    ("section_raising", "its report_section raised RuntimeError: the section hook broke"),
     ("section_wrong_type", "returned a dict, not a ReportSection"),
     ("section_escapes", "SecurityError"),
 ])
@@ -320,7 +322,8 @@ def test_page_one_names_apart_the_detectors_whose_likelihood_ratio_is_within_the
 
     findings = []
     for name, log10_lr in (("strong", 0.6), ("against", -0.4), ("faint", -0.02), ("none", 0.0)):
-        finding = DetectorFinding(name, "1", "p", Status.OK, "s", 0.5, None, None, {}, {}, 0.1)
+        finding = DetectorFinding(name=name, version="1", plugin="p", status=Status.OK, summary="s", score=0.5,
+                                  p_value=None, nfa=None, details={}, parameters={}, elapsed_s=0.1)
         finding.log10_lr = log10_lr
         findings.append(finding)
     verdict = likelihood_ratio(findings)

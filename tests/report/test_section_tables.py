@@ -91,7 +91,8 @@ def test_a_malformed_table_fails_its_section_only(tmp_path, key, plugin, reason)
 def test_numpy_cells_are_written_as_plain_numbers():
     from forensics_core.findings import DetectorFinding, Status
 
-    finding = DetectorFinding("numpy tabled", "1", "p", Status.OK, "s", None, None, None, {}, {}, 0.0)
+    finding = DetectorFinding(name="numpy tabled", version="1", plugin="p", status=Status.OK, summary="s",
+                              score=None, p_value=None, nfa=None, details={}, parameters={}, elapsed_s=0.0)
     table = Table(["n", "x"], [[np.int64(3), np.float64(-0.25)], [np.bool_(True), np.float32(0.5)]], "numpy")
     rendered, files = _tables(finding, {"a/b": table})
     assert list(files) == ["numpy_tabled-a_b.csv"] and rendered[0].n_rows == 2

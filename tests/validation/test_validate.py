@@ -50,7 +50,7 @@ def test_per_condition_breakdown(run):
     assert rows[("kind", "faint")].tpr.value == 0 and rows[("kind", "faint")].authentic_pool == "all"
     assert rows[("kind", "bright")].tpr.value == 1
     assert rows[("size", "small")].authentic_pool == "same"
-    assert rows[("generator", "squares")].n_spliced == 12
+    assert rows[("generator", "square")].n_spliced == 12
 
 
 def test_record_round_trips_and_is_reproducible(run, tmp_path):
@@ -90,7 +90,7 @@ def test_a_plugin_that_yields_garbage_is_reported_and_left_out(tmp_path):
     problems = []
     suite = synthetic_suite(host, tmp_path, seed=1, count=2, on_problem=problems.append)
     assert len(suite.cases) == 4
-    assert problems[0].plugin == "broken_generator" and "not SyntheticCase" in problems[0].reason
+    assert problems[0].detector == "broken_generator" and "not SyntheticCase" in problems[0].reason
 
 
 def test_unreadable_records_are_refused_in_one_line(tmp_path):

@@ -9,7 +9,7 @@ import io
 import numpy as np
 from PIL import Image
 
-from forensics_core import DetectorResult, DetectorSpec, Status, SyntheticCase, hookimpl
+from forensics_core import Detector, DetectorResult, DetectorSpec, Status, SyntheticCase, hookimpl
 
 SIZE = 64
 
@@ -20,13 +20,18 @@ def _png(pixels):
     return buf.getvalue()
 
 
-class Squares:
-    @hookimpl
-    def forensics_register_detectors(self):
-        return [DetectorSpec("square", "2.0", "Finds a bright square.")]
+class _Registers:
+    """A fixture plugin that is also the one detector it registers."""
 
     @hookimpl
-    def forensics_analyze(self, detector, evidence, params):
+    def forensics_register_detectors(self, register):
+        register(self)
+
+
+class Squares(_Registers, Detector):
+    spec = DetectorSpec("square", "2.0", "Finds a bright square.")
+
+    def analyze(self, evidence, params):
         luma = evidence.luma
         if luma.std() == 0:
             return DetectorResult(Status.INCONCLUSIVE, "Flat photo.")
@@ -36,16 +41,14 @@ class Squares:
         box = [int(xs.min()), int(ys.min()), int(xs.max()), int(ys.max())] if len(xs) else None
         return DetectorResult(Status.OK, "Brightest block.", score=1 - p, p_value=p, details={"box": box})
 
-    @hookimpl
-    def forensics_localize(self, finding, shape):
+    def localize(self, finding, shape):
         mask = np.zeros(shape, dtype=bool)
         if finding.p_value is not None and finding.p_value < 0.01 and finding.details["box"]:
             x0, y0, x1, y1 = finding.details["box"]
             mask[y0 : y1 + 1, x0 : x1 + 1] = True
         return mask
 
-    @hookimpl
-    def forensics_synthetic_cases(self, seed, count):
+    def synthetic_cases(self, seed, count):
         for i in range(count):
             rng = np.random.default_rng([seed, i])
             base = rng.uniform(0, 110, (SIZE, SIZE)).astype(np.uint8)
@@ -60,19 +63,20 @@ class Squares:
                                 {"kind": "faint" if level == 140 else "bright", "size": "small"})
 
 
-class Observer:
-    @hookimpl
-    def forensics_register_detectors(self):
-        return [DetectorSpec("observer", "1.0", "Ventures no test.")]
+class Observer(_Registers, Detector):
+    spec = DetectorSpec("observer", "1.0", "Ventures no test.")
 
-    @hookimpl
-    def forensics_analyze(self, detector, evidence, params):
+    def analyze(self, evidence, params):
         return DetectorResult(Status.INCONCLUSIVE, "Never decides.")
 
 
-class BrokenGenerator:
-    @hookimpl
-    def forensics_synthetic_cases(self, seed, count):
+class BrokenGenerator(_Registers, Detector):
+    spec = DetectorSpec("broken_generator", "1.0", "Generates no valid case.")
+
+    def analyze(self, evidence, params):
+        return DetectorResult(Status.INCONCLUSIVE, "Never decides.")
+
+    def synthetic_cases(self, seed, count):
         yield "not a case"
 
 

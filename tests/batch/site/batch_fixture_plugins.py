@@ -13,28 +13,24 @@ import os
 import signal
 import time
 
-from forensics_core import DetectorResult, DetectorSpec, Status, hookimpl
+from forensics_core import Detector, DetectorResult, DetectorSpec, Status, hookimpl
 
 
-class Steady:
-    @hookimpl
-    def forensics_register_detectors(self):
-        return [DetectorSpec("steady", "1.0.0", "Test detector: mean luma after a fixed delay.",
-                             default_params={"seconds": 0.0, "report_seconds": 0.0})]
+class Steady(Detector):
+    spec = DetectorSpec("steady", "1.0.0", "Test detector: mean luma after a fixed delay.",
+                        default_params={"seconds": 0.0, "report_seconds": 0.0})
 
     @hookimpl
-    def forensics_analyze(self, detector, evidence, params):
-        if detector != "steady":
-            return None
+    def forensics_register_detectors(self, register):
+        register(self)
+
+    def analyze(self, evidence, params):
         time.sleep(float(params["seconds"]))
         mean = float(evidence.luma.mean())
         return DetectorResult(Status.OK, f"Mean luma {mean:.3f}.", score=mean, p_value=0.5,
                               details={"mean_luma": mean})
 
-    @hookimpl
-    def forensics_report_section(self, finding, evidence):
-        if finding.name != "steady":
-            return None
+    def report_section(self, finding, evidence):
         time.sleep(float(finding.parameters["report_seconds"]))
         return None
 
