@@ -203,9 +203,9 @@ class Provenance(Detector):
         return DetectorResult(Status.OK, summary, score=score, details=details, headline=headline)
 
     def report_section(self, finding: DetectorFinding, evidence: Evidence) -> ReportSection | None:
-        """The manifest chain, its signers and actions; the generic section when the file carries none."""
-        if "credentials" not in finding.details:
-            return None
-        from .section import report_section
+        """The manifest chain, its signers and actions; where they were looked for when the file carries none."""
+        from .section import absent_section, report_section
 
-        return report_section(finding, evidence)
+        if "credentials" in finding.details:
+            return report_section(finding, evidence)
+        return absent_section(finding) if finding.status is Status.INCONCLUSIVE else None

@@ -31,6 +31,15 @@ def _tables(cred: dict[str, Any], edits: list[str]) -> dict[str, Table]:
     return tables
 
 
+def absent_section(finding: DetectorFinding) -> ReportSection:
+    """The short section for a file that carries no readable Content Credentials: where they were looked for."""
+    d = finding.details
+    context = {"c2pa": d.get("c2pa"), "references": list(REFERENCES),
+               "sidecar": d.get("sidecar_sha256") is not None or "sidecar_error" in d}
+    template = files(__package__).joinpath("templates/absent.html.j2").read_text(encoding="utf-8")
+    return ReportSection(title="Content Credentials (C2PA)", template=template, context=context)
+
+
 def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSection:
     """The section for one provenance finding: validation, signer, actions, ingredients, and what it proves.
 

@@ -233,3 +233,20 @@ def test_through_the_entry_point_with_its_report_section(tmp_path, chain):
     body = str(section_for(host, finding, ev).body)
     for text in ("Tests Camera", "c2pa.created", "What this proves and what it does not", "honest", "offline"):
         assert text in body, text
+
+
+def test_a_photo_without_credentials_gets_a_short_section_saying_where_they_were_looked_for(tmp_path):
+    from forensics_core.analysis import Options, analyze_evidence
+    from forensics_core.plugins import PluginHost
+    from forensics_core.report.plugin_sections import section_for
+
+    host = PluginHost.from_entry_points(allow=["provenance"])
+    path = tmp_path / "plain.jpg"
+    Image.new("RGB", (64, 48), (90, 120, 150)).save(path, quality=90)
+    ev = load_evidence(path)
+    (finding,) = analyze_evidence(ev, host, Options(detectors=["provenance"], isolation="inline")).detectors
+    assert finding.status is Status.INCONCLUSIVE
+    section = section_for(host, finding, ev)
+    assert section.failure is None and section.title == "Content Credentials (C2PA)"
+    body = str(section.body)
+    assert "Looked in" in body and "Their absence says" in body and "sidecar_sha256" not in body
