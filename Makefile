@@ -15,7 +15,7 @@ SYSTEM_PACKAGES := libpango-1.0-0 libpangoft2-1.0-0 libharfbuzz-subset0 fonts-de
 VALIDATION ?= out/validation
 REAL ?= ../shared/data/real
 
-.PHONY: demo test validate validate-real validate-lens-splices validate-innocent-processing calibrate bench bytecode check-python system-packages clean
+.PHONY: demo test validate validate-real validate-lens-splices validate-innocent-processing validate-realistic calibrate bench bytecode check-python system-packages clean
 
 demo: bytecode
 	$(PY) -m forensics_core analyze $(SAMPLES) --out $(OUT) --case-id DEMO-1 --exhibit-id 1
@@ -53,6 +53,15 @@ validate-lens-splices: $(if $(wildcard $(REAL)),bytecode)
 	@if [ ! -d "$(REAL)" ]; then echo "the real corpus is absent ($(REAL)): no lens splices built"; exit 0; fi; \
 	$(PY) -m forensics_core validate lens-splices --corpus "$(REAL)" --out $(OUT)/validation-lens-splices && \
 	echo "page: $(OUT)/validation-lens-splices/validation.html; cases and recipes: $(OUT)/validation-lens-splices/cases/"
+
+# Splices from another camera's photo, copy-moves and removals with
+# object-like outlines, forged from the same building photos into
+# $(OUT)/validation-realistic/cases beside controls saved the same way. Not
+# shipped yet: it is the data for calibrating at scale. No corpus, nothing to build.
+validate-realistic: $(if $(wildcard $(REAL)),bytecode)
+	@if [ ! -d "$(REAL)" ]; then echo "the real corpus is absent ($(REAL)): no forgeries built"; exit 0; fi; \
+	$(PY) -m forensics_core validate realistic --corpus "$(REAL)" --out $(OUT)/validation-realistic && \
+	echo "page: $(OUT)/validation-realistic/validation.html; cases and recipes: $(OUT)/validation-realistic/cases/"
 
 # The same building photos only processed as editors and platforms do (lens
 # correction, rotation, keystone, crop, resizing, levels, sharpening, noise

@@ -19,6 +19,7 @@ _LAZY = {
     "default_workers": "runner",
     "LENS_SPLICES": "lens_splices", "lens_splices_suite": "lens_splices",
     "INNOCENT_PROCESSING": "innocent_processing", "innocent_processing_suite": "innocent_processing",
+    "REALISTIC": "realistic", "realistic_suite": "realistic",
     "RECORD_NAME": "run", "SYNTHETIC": "run", "synthetic_suite": "run", "validate": "run",
 }
 

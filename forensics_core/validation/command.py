@@ -18,16 +18,18 @@ console = Console(stderr=True, highlight=False, emoji=False)
 @click.argument("suites", nargs=-1, required=True)
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Output folder: validation.json, validation.html, findings/, thumbnails/ of the authentic photos "
-                   "convicted and, for the suites it builds (synthetic, lens-splices, innocent-processing), cases/.")
+                   "convicted and, for the suites it builds (synthetic, lens-splices, innocent-processing, realistic), "
+                   "cases/.")
 @click.option("--detectors", help="Comma-separated detector names (default: all installed).")
 @click.option("--workers", type=click.IntRange(min=1), default=None, help="Worker processes (default: number of cores).")
 @click.option("--seed", type=int, default=DEFAULT_SEED, show_default=True,
-              help="Seed of the synthetic, lens-splices and innocent-processing suites.")
+              help="Seed of the synthetic and real-corpus (lens-splices, innocent-processing, realistic) suites.")
 @click.option("--count", type=click.IntRange(min=1), default=DEFAULT_COUNT, show_default=True,
               help="Authentic and spliced photos per detector in the synthetic suite.")
 @click.option("--corpus", type=click.Path(file_okay=False, path_type=Path), default=DEFAULT_REAL_CORPUS,
               show_default=True,
-              help="Real corpus the lens-splices and innocent-processing suites are built from (only read).")
+              help="Real corpus the lens-splices, innocent-processing and realistic suites are built from (only "
+                   "read).")
 @click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=DEFAULT_TIMEOUT_S, show_default=True,
               help="Time limit per detector and photo, seconds.")
 @click.option("--fusion", default="bonferroni", show_default=True, help="Fusion policy for the verdict.")
@@ -40,7 +42,10 @@ def validate_command(ctx, *, suites, out_dir, detectors, workers, seed, count, c
     paper's three kinds of splice and controls, forged from the real
     authentic building photos of --corpus with --seed into OUT/cases/),
     `innocent-processing` (the same photos only processed as editors and
-    platforms do, all authentic, made likewise) or one or more folders: a
+    platforms do, all authentic, made likewise), `realistic` (splices from
+    another camera's photo, copy-moves and removals with object-like
+    outlines, each beside a control saved the same way, made likewise) or
+    one or more folders: a
     set (with a truth.csv, or with authentic/ and tampered/ subfolders and
     masks) or a parent folder whose descendant folders with a truth.csv are
     the sets (see the README). Every photo gets the condition `set`.
@@ -51,8 +56,9 @@ def validate_command(ctx, *, suites, out_dir, detectors, workers, seed, count, c
     photos (their empirical CDF and the photos it convicts).
     """
     from ..analysis import Options
-    from . import (INNOCENT_PROCESSING, LENS_SPLICES, RECORD_NAME, SYNTHETIC, SuiteError, default_workers,
-                   innocent_processing_suite, lens_splices_suite, read_suite, synthetic_suite, validate)
+    from . import (INNOCENT_PROCESSING, LENS_SPLICES, REALISTIC, RECORD_NAME, SYNTHETIC, SuiteError, default_workers,
+                   innocent_processing_suite, lens_splices_suite, read_suite, realistic_suite, synthetic_suite,
+                   validate)
     from .record import VERDICT
 
     host = ctx.find_root().command.host
@@ -65,7 +71,8 @@ def validate_command(ctx, *, suites, out_dir, detectors, workers, seed, count, c
     unknown = sorted(set(names or ()) - set(host.detectors))
     if unknown:
         raise click.BadParameter(f"not installed: {', '.join(unknown)}", param_hint="--detectors")
-    from_corpus = {LENS_SPLICES: lens_splices_suite, INNOCENT_PROCESSING: innocent_processing_suite}
+    from_corpus = {LENS_SPLICES: lens_splices_suite, INNOCENT_PROCESSING: innocent_processing_suite,
+                   REALISTIC: realistic_suite}
     synthetic = SYNTHETIC in suites
     built = synthetic or not from_corpus.keys().isdisjoint(suites)
     if built and len(suites) > 1:

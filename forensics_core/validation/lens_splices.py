@@ -56,7 +56,7 @@ import numpy as np
 from PIL import Image
 
 from .cases import Suite, SuiteError, folder_suite
-from .real_corpus import RealPhoto, camera_turns, read_photos, write_suite
+from .real_corpus import RealPhoto, camera_turns, downscaled, read_photos, save_mask, write_suite
 
 LENS_SPLICES = "lens-splices"
 OTHER_CAMERA, MOVED, RESCALED, CONTROL = "other_camera", "moved", "rescaled", "control"
@@ -410,18 +410,11 @@ def _make(plan: Plan, host: np.ndarray, folder: Path) -> tuple[dict[str, object]
     image = Image.fromarray(pixels)
     mask_image = None if mask is None else Image.fromarray(mask)
     if plan.export.resize is not None:
-        size = (round(image.width * plan.export.resize), round(image.height * plan.export.resize))
-        image = image.resize(size, Image.Resampling.LANCZOS)
-        if mask_image is not None:
-            # Bilinear then half-way keeps the mask on the pixels mostly made of the piece.
-            mask_image = mask_image.resize(size, Image.Resampling.BILINEAR).point(lambda v: 255 if v >= 128 else 0)
+        image, mask_image = downscaled(image, mask_image, plan.export.resize)
     photo = f"{plan.name}.jpg"
     # Pillow writes EXIF only when given it: forgers' exports vary, and none is claimed here.
     image.save(folder / photo, format="JPEG", quality=plan.export.quality, subsampling=_SUBSAMPLING)
-    mask_file = None
-    if mask_image is not None:
-        mask_file = f"masks/{plan.name}.png"
-        mask_image.save(folder / mask_file)
+    mask_file = save_mask(folder, plan.name, mask_image)
     recipe = {
         "name": plan.name, "file": photo, "label": "authentic" if paste is None else "spliced", "kind": plan.kind,
         "mask": mask_file, "seed": plan.seed, "host": plan.host.describe(),

@@ -144,6 +144,27 @@ def camera_turns(photos: Sequence[P], rng: np.random.Generator) -> list[P]:
     return [p for turn in zip_longest(*by_camera.values()) for p in turn if p is not None]
 
 
+def downscaled(image: Image.Image, mask: Image.Image | None, factor: float) -> tuple[Image.Image, Image.Image | None]:
+    """A forged photo downscaled by ``factor`` (Lanczos), and its truth mask with it.
+
+    The mask goes bilinear, then is kept where it is half or more: on the
+    pixels mostly made of the forged content.
+    """
+    size = (round(image.width * factor), round(image.height * factor))
+    image = image.resize(size, Image.Resampling.LANCZOS)
+    if mask is not None:
+        mask = mask.resize(size, Image.Resampling.BILINEAR).point(lambda v: 255 if v >= 128 else 0)
+    return image, mask
+
+
+def save_mask(folder: Path, name: str, mask: Image.Image | None) -> str | None:
+    """Write a case's truth mask as ``masks/<name>.png`` under ``folder``; its path there, or None without one."""
+    if mask is None:
+        return None
+    mask.save(folder / f"masks/{name}.png")
+    return f"masks/{name}.png"
+
+
 def write_suite(folder: Path, suite: str, corpus: Path, seed: int, size: object, method: dict[str, str],
                 made: Sequence[tuple[dict[str, object], dict[str, str]]],
                 header: Sequence[str]) -> list[dict[str, object]]:

@@ -11,6 +11,7 @@ import forensics_core.analysis
 import forensics_core.contracts
 import forensics_core.evidence
 import forensics_core.report.images
+import forensics_core.validation.realistic
 import forensics_core.verify
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -21,7 +22,8 @@ DETECTORS = [f"forensics_plugins.{p}.detector" for p in ("cfa", "copy_move", "dq
 
 
 @pytest.mark.parametrize("module", [forensics_core.analysis, forensics_core.evidence, forensics_core.report.images,
-                                    forensics_core.contracts, forensics_core.verify]
+                                    forensics_core.contracts, forensics_core.verify,
+                                    forensics_core.validation.realistic]
                          + [importlib.import_module(m) for m in NUMERICAL + DETECTORS], ids=lambda m: m.__name__)
 def test_examples_run(module, monkeypatch):
     monkeypatch.chdir(ROOT)
