@@ -5,7 +5,7 @@ Public API for users and plugin authors. Plugins import from here only.
 
 from importlib.metadata import PackageNotFoundError, version
 
-from .detector import Detector
+from .detector import Deferred, Detector
 from .contracts import PROCESSING_KEY, RADIAL_DISTORTION_KEY, Processing, RadialDistortion
 from .findings import (
     HEADLINE_WORDS,
@@ -63,6 +63,7 @@ __all__ = [
     "FileRefused",
     "SMALL",
     "read_limited",
+    "Deferred",
     "Detector",
     "DetectorFinding",
     "DetectorResult",

@@ -237,6 +237,7 @@ def run_detector(
     job = _job(host, name, evidence, params, prior)
     if isinstance(job, DetectorFinding):
         return job
+    host.prepare(name)
     started = time.perf_counter()
     printed: str | None = None
     if options.isolation == "process" and can_fork():
@@ -285,8 +286,13 @@ def run_detectors(host: PluginHost, order: Sequence[str], evidence: Evidence, pa
             if isinstance(job, DetectorFinding):
                 done[name] = job
             else:
+                host.prepare(name)
                 running[Child(job.call, options.timeout_s)] = (name, job)
         if running:
+            # The next detector's imports, while the running ones compute.
+            upcoming = next((n for n in pending if n in host.detectors), None)
+            if upcoming is not None:
+                host.prepare(upcoming)
             for child in wait_any(list(running)):
                 name, job = running.pop(child)
                 outcome, printed = child.collect()

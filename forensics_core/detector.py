@@ -24,6 +24,7 @@ call is meant for it.
 
 from __future__ import annotations
 
+import importlib
 import inspect
 from collections.abc import Iterable, Mapping
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -61,6 +62,15 @@ class Detector:
     """
 
     spec: ClassVar[DetectorSpec]
+
+    def prepare(self) -> None:
+        """Import what the methods need, in the main process, before the detector first runs (optional).
+
+        Called once per process just before the detector's first
+        ``analyze``, while other detectors may already run, so that the
+        forked children share what it imports. The default does nothing;
+        :class:`Deferred` imports its class here.
+        """
 
     def analyze(self, evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
         """Analyse one photo.
@@ -161,13 +171,69 @@ class Detector:
         return ()
 
 
+class Deferred(Detector):
+    """A detector registered by its spec now and its class later, imported the first time it is needed.
+
+    A plugin whose code takes long to import registers
+    ``Deferred(SPEC, "my_package.detector:MyDetector")`` instead of
+    ``MyDetector()``: listing the plugins then imports only the spec, and the
+    core imports the class in the main process just before the detector
+    first runs, while other detectors already run, so that the forked
+    children share the import. The class's own ``spec`` must equal ``spec``.
+
+    Parameters
+    ----------
+    spec : DetectorSpec
+        What the detector declares, as its class does.
+    target : str
+        ``"module:Class"``: where the class is; it is made with no arguments.
+    """
+
+    def __init__(self, spec: DetectorSpec, target: str):
+        self.spec = spec
+        self.target = target
+        self._made: Detector | None = None
+
+    def prepare(self) -> None:
+        self.made()
+
+    def made(self) -> Detector:
+        """The detector itself, its module imported and its class made on the first call."""
+        if self._made is None:
+            module, _, name = self.target.partition(":")
+            detector = getattr(importlib.import_module(module), name)()
+            if not isinstance(detector, Detector) or detector.spec != self.spec:
+                raise TypeError(f"{self.target} is not a Detector whose spec is the one registered for "
+                                f"{self.spec.name!r}")
+            self._made = detector
+        return self._made
+
+    def analyze(self, evidence: Evidence, params: Mapping[str, Any], prior: Mapping[str, DetectorFinding] | None = None
+                ) -> DetectorResult:
+        detector = self.made()
+        if reads_prior(detector):
+            return detector.analyze(evidence, params, prior=prior or {})
+        return detector.analyze(evidence, params)
+
+    def report_section(self, finding: DetectorFinding, evidence: Evidence) -> ReportSection | None:
+        return self.made().report_section(finding, evidence)
+
+    def localize(self, finding: DetectorFinding, shape: tuple[int, int]) -> np.ndarray | None:
+        return self.made().localize(finding, shape)
+
+    def synthetic_cases(self, seed: int, count: int) -> Iterable[SyntheticCase]:
+        return self.made().synthetic_cases(seed, count)
+
+
 def implements(detector: Detector, method: str) -> bool:
     """Whether ``detector``'s class overrides :class:`Detector`'s ``method`` (the optional ones return nothing)."""
+    if isinstance(detector, Deferred):
+        detector = detector.made()
     return getattr(type(detector), method, None) is not getattr(Detector, method)
 
 
 def reads_prior(detector: Detector) -> bool:
-    """Whether ``detector.analyze`` declares the ``prior`` parameter."""
+    """Whether ``detector.analyze`` declares the ``prior`` parameter (a deferred detector always passes it on)."""
     try:
         return "prior" in inspect.signature(detector.analyze).parameters
     except (TypeError, ValueError):

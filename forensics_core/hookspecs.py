@@ -68,9 +68,13 @@ def forensics_register_detectors(register: Callable[[Detector], None]) -> None:
 
     The core calls this hook once, in the main process, the first time it
     needs the detectors (not for ``forensics --help`` or a plugin's own
-    commands), before any photo is analysed. Import your numerical code
-    here rather than at the top of the plugin module: it is then shared
-    with every forked child, and ``forensics --help`` stays fast.
+    commands), before any photo is analysed. Keep it quick: a detector
+    whose code takes long to import is registered as
+    ``Deferred(SPEC, "my_package.detector:MyDetector")``
+    (:class:`forensics_core.Deferred`), so that ``forensics plugins`` reads
+    only its spec and the core imports the class just before it first runs,
+    in the main process, while other detectors already run; the forked
+    children then share the import.
     """
 
 

@@ -91,6 +91,7 @@ class PluginHost:
         self._records: dict[str, PluginRecord] = {}
         self._detectors: dict[str, RegisteredDetector] = {}
         self._unregistered: list[str] = []
+        self._prepared: tuple[int, set[str]] = (0, set())
         self.allow = set(allow) if allow is not None else _env_names(ALLOW_ENV)
         self.deny = set(deny) if deny is not None else (_env_names(DENY_ENV) or set())
         from . import fusion
@@ -282,6 +283,24 @@ class PluginHost:
                 yield HookOutcome(impl.plugin_name, error=exc)
             else:
                 yield HookOutcome(impl.plugin_name, value=value)
+
+    def prepare(self, name: str) -> None:
+        """Call detector ``name``'s ``prepare`` once in this process (:meth:`forensics_core.Detector.prepare`).
+
+        A failure is not raised here: the detector's own run, contained in
+        its child, meets it again and records it as the detector's error.
+        """
+        pid, done = self._prepared
+        if pid != os.getpid():
+            done = set()
+            self._prepared = (os.getpid(), done)
+        if name in done or name not in self.detectors:
+            return
+        done.add(name)
+        try:
+            self.detectors[name].detector.prepare()
+        except Exception:  # noqa: BLE001 (recorded by the detector's contained run)
+            return
 
     def registered(self, finding: DetectorFinding) -> RegisteredDetector | None:
         """The detector object that made ``finding``, if the plugin that registered it is loaded here."""

@@ -1,12 +1,12 @@
-"""The cfa plugin (entry point ``cfa``): registers :class:`.detector.ColourFilterArray`; its module is imported only when the detectors are needed."""
+"""The cfa plugin (entry point ``cfa``): :class:`.detector.ColourFilterArray`, imported when it first runs."""
 
 from __future__ import annotations
 
-from forensics_core import hookimpl
+from forensics_core import Deferred, hookimpl
+
+from .spec import SPEC
 
 
 @hookimpl
 def forensics_register_detectors(register):
-    from .detector import ColourFilterArray
-
-    register(ColourFilterArray())
+    register(Deferred(SPEC, f"{__package__}.detector:ColourFilterArray"))

@@ -1,12 +1,12 @@
-"""The copy_move plugin (entry point ``copy_move``): registers :class:`.detector.CopyMove`; its module is imported only when the detectors are needed."""
+"""The copy_move plugin (entry point ``copy_move``): :class:`.detector.CopyMove`, imported when it first runs."""
 
 from __future__ import annotations
 
-from forensics_core import hookimpl
+from forensics_core import Deferred, hookimpl
+
+from .spec import SPEC
 
 
 @hookimpl
 def forensics_register_detectors(register):
-    from .detector import CopyMove
-
-    register(CopyMove())
+    register(Deferred(SPEC, f"{__package__}.detector:CopyMove"))

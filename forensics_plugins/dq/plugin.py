@@ -1,12 +1,12 @@
-"""The dq plugin (entry point ``dq``): registers :class:`.detector.DoubleQuantisation`; its module is imported only when the detectors are needed."""
+"""The dq plugin (entry point ``dq``): :class:`.detector.DoubleQuantisation`, imported when it first runs."""
 
 from __future__ import annotations
 
-from forensics_core import hookimpl
+from forensics_core import Deferred, hookimpl
+
+from .spec import SPEC
 
 
 @hookimpl
 def forensics_register_detectors(register):
-    from .detector import DoubleQuantisation
-
-    register(DoubleQuantisation())
+    register(Deferred(SPEC, f"{__package__}.detector:DoubleQuantisation"))

@@ -1,12 +1,12 @@
-"""The jpeg_grid plugin (entry point ``jpeg_grid``): registers :class:`.detector.JpegGrid`; its module is imported only when the detectors are needed."""
+"""The jpeg_grid plugin (entry point ``jpeg_grid``): :class:`.detector.JpegGrid`, imported when it first runs."""
 
 from __future__ import annotations
 
-from forensics_core import hookimpl
+from forensics_core import Deferred, hookimpl
+
+from .spec import SPEC
 
 
 @hookimpl
 def forensics_register_detectors(register):
-    from .detector import JpegGrid
-
-    register(JpegGrid())
+    register(Deferred(SPEC, f"{__package__}.detector:JpegGrid"))

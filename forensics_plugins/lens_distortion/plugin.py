@@ -1,15 +1,15 @@
-"""The lens_distortion plugin (entry point ``lens_distortion``): registers :class:`.detector.LensDistortion`; its module is imported only when the detectors are needed."""
+"""The lens_distortion plugin (entry point ``lens_distortion``): :class:`.detector.LensDistortion`, imported when it first runs."""
 
 from __future__ import annotations
 
-from forensics_core import hookimpl
+from forensics_core import Deferred, hookimpl
+
+from .spec import SPEC
 
 
 @hookimpl
 def forensics_register_detectors(register):
-    from .detector import LensDistortion
-
-    register(LensDistortion())
+    register(Deferred(SPEC, f"{__package__}.detector:LensDistortion"))
 
 
 @hookimpl

@@ -1,12 +1,12 @@
-"""The metadata plugin (entry point ``metadata``): registers :class:`.detector.Metadata`; its module is imported only when the detectors are needed."""
+"""The metadata plugin (entry point ``metadata``): :class:`.detector.Metadata`, imported when it first runs."""
 
 from __future__ import annotations
 
-from forensics_core import hookimpl
+from forensics_core import Deferred, hookimpl
+
+from .spec import SPEC
 
 
 @hookimpl
 def forensics_register_detectors(register):
-    from .detector import Metadata
-
-    register(Metadata())
+    register(Deferred(SPEC, f"{__package__}.detector:Metadata"))

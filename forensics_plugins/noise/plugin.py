@@ -1,12 +1,12 @@
-"""The noise plugin (entry point ``noise``): registers :class:`.detector.NoiseLevel`; its module is imported only when the detectors are needed."""
+"""The noise plugin (entry point ``noise``): :class:`.detector.NoiseLevel`, imported when it first runs."""
 
 from __future__ import annotations
 
-from forensics_core import hookimpl
+from forensics_core import Deferred, hookimpl
+
+from .spec import SPEC
 
 
 @hookimpl
 def forensics_register_detectors(register):
-    from .detector import NoiseLevel
-
-    register(NoiseLevel())
+    register(Deferred(SPEC, f"{__package__}.detector:NoiseLevel"))

@@ -1,12 +1,12 @@
-"""The provenance plugin (entry point ``provenance``): registers :class:`.detector.Provenance`; its module is imported only when the detectors are needed."""
+"""The provenance plugin (entry point ``provenance``): :class:`.detector.Provenance`, imported when it first runs."""
 
 from __future__ import annotations
 
-from forensics_core import hookimpl
+from forensics_core import Deferred, hookimpl
+
+from .spec import SPEC
 
 
 @hookimpl
 def forensics_register_detectors(register):
-    from .detector import Provenance
-
-    register(Provenance())
+    register(Deferred(SPEC, f"{__package__}.detector:Provenance"))

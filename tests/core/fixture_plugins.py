@@ -125,6 +125,20 @@ class Chatty(_Detector):
         return DetectorResult(Status.OK, "Printed a lot.", score=0.1)
 
 
+class DeferredPlugin:
+    """Registers a detector by its spec and the import path of its class (the module is not imported here)."""
+
+    def __init__(self, target, spec=None):
+        self.target, self.spec = target, spec
+
+    @hookimpl
+    def forensics_register_detectors(self, register):
+        from forensics_core import Deferred
+
+        spec = self.spec or DetectorSpec("deferred", "1.0", "Imported when it first runs.", default_params={"level": 1})
+        register(Deferred(spec, self.target))
+
+
 class BadRegistration:
     @hookimpl
     def forensics_register_detectors(self, register):
@@ -242,3 +256,6 @@ out_of_range, crashing, mutating, file_writer, chatty = OutOfRange(), Crashing()
 bad_registration, typo, wrong_args, raising_fusion, metadata = BadRegistration(), Typo(), WrongArgs(), RaisingFusion(), Metadata()
 api_one, api_one_specs, not_a_detector, two_names = ApiOne(), ApiOneSpecs(), NotADetector(), TwoNames()
 early_fusion, late_fusion, first_fusion = EarlyFusion(), LateFusion(), FirstFusion()
+deferred = DeferredPlugin("fixture_deferred:Lazy")
+deferred_mismatched = DeferredPlugin("fixture_deferred:Mismatched",
+                                     DetectorSpec("deferred_mismatched", "1.0", "Its class says otherwise."))

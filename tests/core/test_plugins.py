@@ -56,6 +56,21 @@ def test_the_core_calls_the_detector_object_it_registered(photo):
     assert host.detectors["good"].plugin == "good"
 
 
+def test_a_deferred_detector_is_imported_in_the_main_process_only_when_it_first_runs(photo):
+    import sys
+
+    sys.modules.pop("fixture_deferred", None)
+    host = fixture_host("good", "deferred", "deferred_mismatched")
+    assert set(host.detectors) == {"good", "deferred", "deferred_mismatched"}
+    assert "fixture_deferred" not in sys.modules
+    findings = by_name(analyze(photo, ["good", "deferred", "deferred_mismatched"], host=host, jobs=2))
+    assert "fixture_deferred" in sys.modules
+    assert findings["deferred"].status is Status.OK and findings["deferred"].details["prior"] == []
+    assert findings["deferred_mismatched"].status is Status.ERROR
+    assert "is not a Detector whose spec is the one registered" in findings["deferred_mismatched"].error
+    assert findings["good"].status is Status.OK
+
+
 def test_a_raising_detector_is_recorded_and_the_others_survive(photo):
     host = fixture_host("good", "raising")
     findings = by_name(analyze(photo, host=host, timeout=30))

@@ -46,7 +46,8 @@ def _camera_file(tmp_path, img=None, thumb_img=None, **overrides):
 def test_spec_and_registration():
     registered = []
     plugin.forensics_register_detectors(registered.append)
-    assert [type(d) for d in registered] == [Metadata] and registered[0].spec == SPEC
+    assert len(registered) == 1 and registered[0].spec == SPEC
+    assert isinstance(registered[0].made(), Metadata)
     assert SPEC.uses == ("lens_distortion",) and SPEC.version == "1.2.0"
     assert json.dumps(SPEC.default_params)
     assert any("CC BY-SA 3.0" in ref for ref in SPEC.references)
