@@ -51,7 +51,7 @@ REPLACED_HOOKS = {
     "forensics_report_section": "Detector.report_section",
     "forensics_localize": "Detector.localize",
     "forensics_synthetic_cases": "Detector.synthetic_cases",
-    "forensics_prepare": "imports inside forensics_register_detectors",
+    "forensics_prepare": "Detector.prepare",
 }
 """Hooks of plugin API 1 and what replaced each in API 2 (named in a load error)."""
 
