@@ -6,7 +6,14 @@ Public API for users and plugin authors. Plugins import from here only.
 from importlib.metadata import PackageNotFoundError, version
 
 from .detector import Deferred, Detector
-from .contracts import PROCESSING_KEY, RADIAL_DISTORTION_KEY, Processing, RadialDistortion
+from .contracts import (
+    ATTRIBUTION_KEY,
+    PROCESSING_KEY,
+    RADIAL_DISTORTION_KEY,
+    Processing,
+    RadialDistortion,
+    SourceAttribution,
+)
 from .findings import (
     HEADLINE_WORDS,
     DetectorFinding,
@@ -38,6 +45,9 @@ _LAZY = {
     "Evidence": "evidence",
     "EvidenceError": "evidence",
     "load_evidence": "evidence",
+    "ReferenceSet": "reference",
+    "ReferenceError": "reference",
+    "load_references": "reference",
     "SyntheticCase": "synthetic",
     "box_sums": "integral",
     "integral_image": "integral",
@@ -59,6 +69,7 @@ def __getattr__(name: str):
 
 
 __all__ = [
+    "ATTRIBUTION_KEY",
     "ENTRY_POINT_GROUP",
     "FileRefused",
     "SMALL",
@@ -79,6 +90,9 @@ __all__ = [
     "Processing",
     "RADIAL_DISTORTION_KEY",
     "RadialDistortion",
+    "ReferenceError",
+    "SourceAttribution",
+    "ReferenceSet",
     "Status",
     "SyntheticCase",
     "Verdict",
@@ -91,5 +105,6 @@ __all__ = [
     "hookimpl",
     "integral_image",
     "load_evidence",
+    "load_references",
     "paste_ellipse",
 ]

@@ -42,6 +42,7 @@ from .defaults import DEFAULT_MAX_PIXELS, DEFAULT_TIMEOUT_S, ISOLATIONS
 from .evaluation import calibration_file, decide_by_lr, evaluate
 from .fusion import POLICY as DEFAULT_FUSION
 from .plugins import PluginHost, one_line
+from .reference import ReferenceSet, references_for
 
 _ENV_PACKAGES = ("numpy", "scipy", "scikit-image", "pillow", "pluggy", "numba")
 
@@ -68,6 +69,10 @@ class Options:
     calibration : str or None
         Path of the likelihood-ratio calibrators (``forensics calibrate``);
         None for those shipped with the tool.
+    reference : str or None
+        Folder of reference photos of the claimed camera
+        (:mod:`~forensics_core.reference`), for detectors whose spec
+        ``uses_reference``; None for none.
     jobs : int
         Detectors run at once, each in its own process (``isolation="process"``
         only; one at a time above :data:`~forensics_core.defaults.PARALLEL_MAX_PIXELS`).
@@ -86,6 +91,7 @@ class Options:
     case_id: str | None = None
     examiner: str | None = None
     calibration: str | None = None
+    reference: str | None = None
     jobs: int = 1
     resolved: bool = False
 
@@ -175,7 +181,7 @@ def _not_run(spec: DetectorSpec, plugin: str, params: dict[str, Any], status: St
 
 
 def _job(host: PluginHost, name: str, evidence: Evidence, params: dict[str, Any],
-         prior: Mapping[str, DetectorFinding] | None) -> _Job | DetectorFinding:
+         prior: Mapping[str, DetectorFinding] | None, reference: ReferenceSet | None = None) -> _Job | DetectorFinding:
     """The detector's job, or its finding when it cannot or need not run (not installed, another format)."""
     registered = host.detectors.get(name)
     if registered is None:
@@ -191,12 +197,16 @@ def _job(host: PluginHost, name: str, evidence: Evidence, params: dict[str, Any]
         return _not_run(spec, plugin, params, Status.SKIPPED,
                         f"Not applied to a {fmt} file: the detector applies to {', '.join(spec.formats)} files, the "
                         f"formats its null model was checked on.", details={"formats": list(spec.formats)})
+    if spec.uses_reference and reference is None:
+        return _not_run(spec, plugin, params, Status.SKIPPED,
+                        "Not applied: no reference photos of the claimed camera were given (--reference DIR).")
     seen = {n: f for n, f in (prior or {}).items() if n in spec.uses}
+    extra: dict[str, Any] = {"reference": reference} if spec.uses_reference else {}
+    if registered.reads_prior:
+        extra["prior"] = seen
 
     def call() -> Any:
-        if registered.reads_prior:
-            return detector.analyze(evidence, dict(params), prior=seen)
-        return detector.analyze(evidence, dict(params))
+        return detector.analyze(evidence, dict(params), **extra)
 
     return _Job(spec, plugin, params, call)
 
@@ -218,7 +228,7 @@ def _finding(job: _Job, outcome: tuple, printed: str | None, elapsed_s: float) -
     return DetectorFinding(name=spec.name, version=spec.version, plugin=job.plugin, status=result.status,
                            summary=result.summary, score=result.score, p_value=result.p_value, nfa=result.nfa,
                            details=result.details, parameters=job.params, elapsed_s=elapsed, output=printed,
-                           headline=result.headline)
+                           headline=result.headline, log10_lr=result.log10_lr)
 
 
 def run_detector(
@@ -228,13 +238,14 @@ def run_detector(
     params: dict[str, Any],
     options: Options,
     prior: Mapping[str, DetectorFinding] | None = None,
+    reference: ReferenceSet | None = None,
 ) -> DetectorFinding:
     """Run one detector with containment; always returns a finding.
 
     ``prior`` holds findings of this run; the detector sees those its spec
-    ``uses``.
+    ``uses``. ``reference`` goes to a detector whose spec ``uses_reference``.
     """
-    job = _job(host, name, evidence, params, prior)
+    job = _job(host, name, evidence, params, prior, reference)
     if isinstance(job, DetectorFinding):
         return job
     host.prepare(name)
@@ -255,7 +266,8 @@ def detector_jobs(options: Options, evidence: Evidence) -> int:
 
 
 def run_detectors(host: PluginHost, order: Sequence[str], evidence: Evidence, params: Mapping[str, dict[str, Any]],
-                  options: Options, jobs: int = 1) -> dict[str, DetectorFinding]:
+                  options: Options, jobs: int = 1,
+                  reference: ReferenceSet | None = None) -> dict[str, DetectorFinding]:
     """Run the detectors of ``order`` (from :func:`run_order`), ``jobs`` at a time; a finding for each.
 
     A detector starts once those it ``uses`` have finished, so it sees their
@@ -265,7 +277,8 @@ def run_detectors(host: PluginHost, order: Sequence[str], evidence: Evidence, pa
     done: dict[str, DetectorFinding] = {}
     if jobs <= 1:
         for name in order:
-            done[name] = run_detector(host, name, evidence, params.get(name, {}), options, prior=done)
+            done[name] = run_detector(host, name, evidence, params.get(name, {}), options, prior=done,
+                                      reference=reference)
         return done
     chosen = set(order)
     pending = list(order)
@@ -282,7 +295,7 @@ def run_detectors(host: PluginHost, order: Sequence[str], evidence: Evidence, pa
             if name is None:
                 break
             pending.remove(name)
-            job = _job(host, name, evidence, params.get(name, {}), done)
+            job = _job(host, name, evidence, params.get(name, {}), done, reference)
             if isinstance(job, DetectorFinding):
                 done[name] = job
             else:
@@ -366,8 +379,9 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
     selected = list(options.detectors)
     contained = options.timeout_s if options.isolation == "process" else None
     evidence.info.extra_metadata = _extra_metadata(host, evidence, contained)
+    reference = references_for(options.reference, options.max_pixels) if options.reference else None
     done = run_detectors(host, run_order(host, selected), evidence, params, options,
-                         detector_jobs(options, evidence))
+                         detector_jobs(options, evidence), reference)
     findings = [done[name] for name in selected]
     verdict = fuse(host, options.fusion, findings, evidence)
     evaluate(findings, verdict, evidence.info, calibration_file(options.calibration))
@@ -387,11 +401,13 @@ def analyze_evidence(evidence: Evidence, host: PluginHost, options: Options) -> 
             "case_id": options.case_id,
             "examiner": options.examiner,
             "calibration": options.calibration,
+            "reference": options.reference,
         },
         environment=environment(),
         plugins=host.plugin_records(),
         detectors=findings,
         verdict=verdict,
+        references=reference.records if reference else [],
     )
 
 
@@ -407,6 +423,7 @@ def analyze(
     case_id: str | None = None,
     examiner: str | None = None,
     jobs: int = 1,
+    reference: str | os.PathLike[str] | None = None,
     **params: Mapping[str, Any],
 ) -> Findings:
     """Analyse one photo and return its findings.
@@ -419,7 +436,7 @@ def analyze(
         Detectors to run; default all installed.
     host : PluginHost, optional
         Loaded plugins; default: load the installed entry points.
-    timeout, max_pixels, fusion, isolation, case_id, examiner, jobs
+    timeout, max_pixels, fusion, isolation, case_id, examiner, jobs, reference
         See :class:`Options`.
     **params : mapping
         Per-detector parameter overrides, keyed by detector name, e.g.
@@ -451,6 +468,7 @@ def analyze(
         case_id=case_id,
         examiner=examiner,
         jobs=jobs,
+        reference=os.fspath(reference) if reference is not None else None,
     )
     return analyze_evidence(evidence, host, options)
 

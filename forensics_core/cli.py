@@ -222,6 +222,9 @@ def _run_options(command):
         click.option("--calibration", "calibration_path", type=click.Path(dir_okay=False, exists=True, path_type=Path),
                      help="Likelihood-ratio calibrators (written by `forensics calibrate`) for the findings' LRs "
                           "(default: those shipped with this release, fitted on the real-photo corpus)."),
+        click.option("--reference", "reference_path", type=click.Path(path_type=Path),
+                     help="Folder of reference photos of the camera that allegedly took the photo(s): hashed, listed "
+                          "in the findings and read only, for the detectors that compare with them (prnu)."),
     ]
     for option in reversed(options):
         command = option(command)
@@ -248,6 +251,7 @@ class RunRequest:
     tsa_url: str | None
     validation_path: Path | None
     calibration_path: Path | None
+    reference_path: Path | None = None
     jobs: int = 1
 
 
@@ -260,6 +264,7 @@ def _prepare_run(host: PluginHost, request: RunRequest) -> tuple[Options, Report
     from .calibration import CalibrationError
     from .calibration import load as load_calibration
     from .pipeline import ReportSettings
+    from .reference import ReferenceError, references_for
 
     wanted_formats = _split_list(request.formats) or []
     bad = sorted(set(wanted_formats) - set(FORMATS))
@@ -274,11 +279,18 @@ def _prepare_run(host: PluginHost, request: RunRequest) -> tuple[Options, Report
             load_calibration(request.calibration_path)
         except CalibrationError as exc:
             raise click.BadParameter(str(exc), param_hint="--calibration") from None
+    reference = None
+    if request.reference_path is not None:
+        reference = str(request.reference_path.resolve())
+        try:
+            references_for(reference, request.max_pixels)
+        except ReferenceError as exc:
+            raise click.BadParameter(str(exc), param_hint="--reference") from None
     options = Options(detectors=_split_list(request.detectors), timeout_s=request.timeout,
                       max_pixels=request.max_pixels, fusion=request.fusion, isolation=request.isolation,
                       detector_params=detector_params, case_id=request.case_id, examiner=request.examiner,
                       calibration=str(request.calibration_path.resolve()) if request.calibration_path else None,
-                      jobs=request.jobs)
+                      reference=reference, jobs=request.jobs)
     try:
         options = options.resolve(host)
     except ValueError as exc:
@@ -453,7 +465,7 @@ def plugins_command(ctx, as_json):
             "detectors": [
                 {"name": n, "plugin": d.plugin, "version": d.spec.version, "description": d.spec.description,
                  "references": list(d.spec.references), "default_params": dict(d.spec.default_params),
-                 "uses": list(d.spec.uses)}
+                 "uses": list(d.spec.uses), "uses_reference": d.spec.uses_reference}
                 for n, d in sorted(host.detectors.items())
             ],
         }

@@ -135,3 +135,53 @@ class Processing:
         if not isinstance(record, Mapping) or not all(isinstance(record.get(k), str) for k in ("kind", "description")):
             return None
         return cls(kind=record["kind"], description=record["description"])
+
+
+#: The key under which a finding's ``details`` carry a source statement (:class:`SourceAttribution`).
+ATTRIBUTION_KEY = "attribution"
+
+
+@dataclass(frozen=True)
+class SourceAttribution:
+    """A likelihood ratio for the photo's source, for propositions of its own, kept apart from the manipulation
+    statement.
+
+    Published under ``details["attribution"]`` by a detector that compares
+    the photo with a claimed camera (``prnu``); the report states it on its
+    first page in a line of its own, never in the fused likelihood ratio,
+    which answers whether content was inserted, moved or removed.
+
+    Attributes
+    ----------
+    hp, hd : str
+        The source propositions, e.g. "the photo was taken by the reference
+        camera" and "by another camera of the same model".
+    log10_lr : float
+        Calibrated and bounded.
+    basis : str
+        What the LR rests on, completing "Based on ...", e.g. "the PCE of the
+        sensor fingerprint (1.2e4)".
+    """
+
+    hp: str
+    hd: str
+    log10_lr: float
+    basis: str
+
+    def to_details(self) -> dict[str, Any]:
+        """The JSON form stored in the publishing finding's details."""
+        return asdict(self)
+
+    @classmethod
+    def from_finding(cls, finding: DetectorFinding | None) -> SourceAttribution | None:
+        """The source statement of a finding that ran (``ok`` or ``inconclusive``); None without a complete one."""
+        if (finding is None or finding.status not in (Status.OK, Status.INCONCLUSIVE)
+                or not isinstance(finding.details, Mapping)):
+            return None
+        record = finding.details.get(ATTRIBUTION_KEY)
+        if not isinstance(record, Mapping) or not all(isinstance(record.get(k), str) for k in ("hp", "hd", "basis")):
+            return None
+        value = record.get("log10_lr")
+        if not isinstance(value, (int, float)) or isinstance(value, bool):
+            return None
+        return cls(hp=record["hp"], hd=record["hd"], log10_lr=float(value), basis=record["basis"])

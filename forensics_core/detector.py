@@ -34,6 +34,7 @@ if TYPE_CHECKING:
 
     from .evidence import Evidence
     from .findings import DetectorFinding, DetectorResult, DetectorSpec
+    from .reference import ReferenceSet
     from .report.sections import ReportSection
     from .synthetic import SyntheticCase
 
@@ -87,8 +88,16 @@ class Detector:
             evidence.decoding():`` so the user's pixel limit applies.
         params : mapping
             The spec's ``default_params`` merged with the user's overrides.
+        reference : ReferenceSet, optional
+            Declare a parameter named ``reference``, and set the spec's
+            ``uses_reference``, to receive the reference photos of the camera
+            that allegedly took the photo (``forensics analyze --reference
+            DIR``): each an :class:`~forensics_core.Evidence`, hashed and
+            read-only as the evidence is; ``reference.digest`` names the set
+            (a cache key). Without references the core records the detector
+            ``skipped`` and does not call it.
         prior : mapping of str to DetectorFinding, optional
-            Declare a third parameter named ``prior`` to receive the
+            Declare a parameter named ``prior`` to receive the
             findings of this run's detectors named in the spec's ``uses``
             (those that ran). Read another detector's details only through a
             record of :mod:`forensics_core.contracts` (e.g.
@@ -208,12 +217,13 @@ class Deferred(Detector):
             self._made = detector
         return self._made
 
-    def analyze(self, evidence: Evidence, params: Mapping[str, Any], prior: Mapping[str, DetectorFinding] | None = None
-                ) -> DetectorResult:
+    def analyze(self, evidence: Evidence, params: Mapping[str, Any], prior: Mapping[str, DetectorFinding] | None = None,
+                reference: ReferenceSet | None = None) -> DetectorResult:
         detector = self.made()
+        extra: dict[str, Any] = {"reference": reference} if self.spec.uses_reference else {}
         if reads_prior(detector):
-            return detector.analyze(evidence, params, prior=prior or {})
-        return detector.analyze(evidence, params)
+            extra["prior"] = prior or {}
+        return detector.analyze(evidence, params, **extra)
 
     def report_section(self, finding: DetectorFinding, evidence: Evidence) -> ReportSection | None:
         return self.made().report_section(finding, evidence)

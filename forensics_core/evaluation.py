@@ -72,9 +72,16 @@ def evaluate(findings: Sequence[DetectorFinding], verdict: Verdict, info: Eviden
     p_values = {f.name: (finding_p(f) if f.status is Status.OK else None) for f in findings}
     scores = {f.name: (f.score if f.status is Status.OK else None) for f in findings}
     llrs = calibration.detector_llrs(p_values, scores)
+    # A detector calibrated on its own data (reference photos) states its LR;
+    # its trace, the sensor's noise, is read by no other detector, so it is
+    # added to the fusion of the others as independent evidence.
+    own = {f.name: f.log10_lr for f in findings if f.status is Status.OK and f.log10_lr is not None}
+    llrs.update(own)
     for f in findings:
         f.log10_lr = None if llrs[f.name] is None else round(llrs[f.name], 4)
-    fused = calibration.fused(llrs)
+    fused = calibration.fused({n: v for n, v in llrs.items() if n not in own})
+    if fused is not None and own:
+        fused += sum(own.values())
     verdict.log10_lr = None if fused is None else round(fused, 4)
     data = calibration.data
     verdict.likelihood_ratio = LikelihoodRatio(
@@ -92,6 +99,8 @@ def evaluate(findings: Sequence[DetectorFinding], verdict: Verdict, info: Eviden
             "cllr_min_fused": calibration.fusion.cllr_min if calibration.fusion else None,
             "elub_fused": [calibration.fusion.lower, calibration.fusion.upper] if calibration.fusion else None,
             "tool": dict(calibration.tool),
+            **({"own_calibration": {f.name: f.details.get("calibration") for f in findings if f.name in own}}
+               if own else {}),
         },
         relevance=_relevance(calibration, info),
     )

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
-SCHEMA_VERSION = "1.5"
+SCHEMA_VERSION = "1.6"
 
 
 class Status(str, enum.Enum):
@@ -84,6 +84,12 @@ class DetectorSpec:
         one kind of manipulation only, whose clean finding says nothing about
         the others that Hp covers (a copy-move detector that finds no clone
         says nothing about a splice): its calibrated LR is then never below 1.
+    uses_reference : bool
+        Whether the detector compares the evidence with reference photos of
+        the camera that allegedly took it (``forensics analyze --reference
+        DIR``). The core passes them as ``reference``
+        (:class:`forensics_core.ReferenceSet`) to ``Detector.analyze``, and
+        records the detector ``skipped`` when none were given.
     """
 
     name: str
@@ -95,6 +101,7 @@ class DetectorSpec:
     formats: tuple[str, ...] = ()
     calibrated_on: str = "p_value"
     supports_hd: bool = True
+    uses_reference: bool = False
 
 
 HEADLINE_WORDS = 25
@@ -128,6 +135,14 @@ class DetectorResult:
         index ("Regions at x 1380-1625 carry another JPEG grid (NFA
         10^-6.7)."). Where it is missing or longer, the report shows the
         summary's first sentence, cut to that length.
+    log10_lr : float or None
+        The detector's own calibrated log10 likelihood ratio for the
+        manipulation propositions, for a detector calibrated on data that
+        ``forensics validate`` records cannot hold (reference photos of a
+        claimed camera); say in ``details["calibration"]`` what it was
+        fitted on. The core uses it instead of any calibrator of its own for
+        the detector, and adds it to the fused LR as a trace independent of
+        the others'. None for the usual detector, which the core calibrates.
     """
 
     status: Status
@@ -137,6 +152,7 @@ class DetectorResult:
     nfa: float | None = None
     details: dict[str, Any] = field(default_factory=dict)
     headline: str | None = None
+    log10_lr: float | None = None
 
 
 @dataclass(kw_only=True)
@@ -363,6 +379,18 @@ class PluginRecord:
 
 
 @dataclass
+class ReferenceRecord:
+    """A reference photo of the claimed camera, as the findings list it (:mod:`forensics_core.reference`)."""
+
+    name: str
+    size: int
+    sha256: str
+    format: str
+    width: int
+    height: int
+
+
+@dataclass
 class Tool:
     name: str
     version: str
@@ -381,6 +409,8 @@ class Findings:
     plugins: list[PluginRecord]
     detectors: list[DetectorFinding]
     verdict: Verdict
+    references: list[ReferenceRecord] = field(default_factory=list)
+    """Reference photos given with ``--reference`` (empty without)."""
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self, dict_factory=_enum_values)
@@ -417,6 +447,7 @@ class Findings:
                 DetectorFinding(**{**d, "status": Status(d["status"])}) for d in data["detectors"]
             ],
             verdict=Verdict(**verdict),
+            references=[ReferenceRecord(**r) for r in data.get("references", [])],
         )
 
 
@@ -503,6 +534,12 @@ def check_result(result: Any) -> DetectorResult:
         raise MalformedResult("details must be a mapping")
     if result.headline is not None and not isinstance(result.headline, str):
         raise MalformedResult("headline must be a sentence or None")
+    log10_lr = None
+    if result.log10_lr is not None:
+        if isinstance(result.log10_lr, bool) or not isinstance(result.log10_lr, (int, float)) \
+                or not math.isfinite(float(result.log10_lr)):
+            raise MalformedResult("log10_lr must be a finite number or None")
+        log10_lr = float(result.log10_lr)
     return DetectorResult(
         status=status,
         summary=result.summary.strip(),
@@ -511,6 +548,7 @@ def check_result(result: Any) -> DetectorResult:
         nfa=nfa,
         details=to_jsonable(result.details),
         headline=result.headline.strip() or None if result.headline is not None else None,
+        log10_lr=log10_lr,
     )
 
 

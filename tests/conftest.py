@@ -12,8 +12,9 @@ DATA = Path(__file__).parent / "data"
 
 @pytest.fixture(autouse=True)
 def private_home(tmp_path_factory, monkeypatch):
-    """Keep the per-user examiner key the CLI makes on first use out of the real home folder."""
+    """Keep the per-user examiner key the CLI makes on first use, and the fingerprint cache, out of the real home."""
     monkeypatch.setenv("FORENSICS_HOME", str(tmp_path_factory.mktemp("forensics-home")))
+    monkeypatch.setenv("FORENSICS_CACHE", str(tmp_path_factory.mktemp("forensics-cache")))
 
 
 @pytest.fixture(scope="session")

@@ -31,7 +31,7 @@ FOREIGN = "foreign"
 # write_atomic's temporary names: tempfile.mkstemp(prefix=".NAME.", suffix=".tmp").
 _TEMP = re.compile(r"^\..+\.[a-z0-9_]{8}\.tmp$")
 _REPORT_FILES = {"html": HTML_NAME, "pdf": PDF_NAME}
-_COMPARED_PARAMETERS = ("detectors", "detector_params", "fusion", "case_id", "examiner")
+_COMPARED_PARAMETERS = ("detectors", "detector_params", "fusion", "case_id", "examiner", "reference")
 
 
 @dataclass(frozen=True)
@@ -145,10 +145,10 @@ def is_complete(folder: Path, sha256: str, expected: Expected) -> bool:
 
 
 def expected_parameters(detectors: list[str], detector_params: dict[str, dict[str, Any]], fusion: str,
-                        case_id: str | None, examiner: str | None) -> dict[str, Any]:
+                        case_id: str | None, examiner: str | None, reference: str | None = None) -> dict[str, Any]:
     """The subset of the findings' ``parameters`` a rerun compares (see :class:`Expected`)."""
     values = {"detectors": detectors, "detector_params": detector_params, "fusion": fusion, "case_id": case_id,
-              "examiner": examiner}
+              "examiner": examiner, "reference": reference}
     return {k: values[k] for k in _COMPARED_PARAMETERS}
 
 

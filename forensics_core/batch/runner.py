@@ -237,7 +237,7 @@ def run_batch(request: BatchRequest, host: PluginHost, key: ExaminerKey | None, 
     settings = replace(request.settings, options=options)
     expected = Expected(settings.report_formats,
                         expected_parameters(list(options.detectors), options.detector_params, options.fusion,
-                                            options.case_id, options.examiner),
+                                            options.case_id, options.examiner, options.reference),
                         settings.report_options.exhibit_id)
     with ExitStack() as stack:
         try:

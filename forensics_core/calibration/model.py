@@ -296,8 +296,11 @@ def supports(log10_lr: float | None) -> int:
     return 1 if log10_lr > 0 else -1
 
 
-def verbal(log10_lr: float) -> str:
-    """ENFSI's verbal equivalent of an LR (Guideline for Evaluative Reporting, 2015, p. 17), for either side."""
+def verbal(log10_lr: float, hp: str = "Hp (manipulation)", hd: str = "Hd (as the camera produced it)") -> str:
+    """ENFSI's verbal equivalent of an LR (Guideline for Evaluative Reporting, 2015, p. 17), for either side.
+
+    ``hp`` and ``hd`` name the propositions (by default the manipulation statement's).
+    """
     lr = 10.0 ** abs(log10_lr)
     steps: Sequence[tuple[float, str]] = ((1_000_000.0, "extremely strong"), (10_000.0, "very strong"),
                                           (1_000.0, "strong"), (100.0, "moderately strong"), (10.0, "moderate"),
@@ -305,5 +308,5 @@ def verbal(log10_lr: float) -> str:
     if not supports(log10_lr):
         return "no support for either proposition (the findings are about as probable under both)"
     words = next(w for bound, w in steps if lr >= bound)
-    side = "Hp (manipulation)" if log10_lr > 0 else "Hd (as the camera produced it)"
+    side = hp if log10_lr > 0 else hd
     return f"{words} support for {side}"

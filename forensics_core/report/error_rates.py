@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..findings import Findings
+from ..findings import Findings, Status
 from ..plugins import one_line
 from ..validation import INNOCENT_PROCESSING, LENS_SPLICES, SYNTHETIC
 from ..validation.cases import SET_CONDITION
@@ -146,6 +146,9 @@ def record_rates(findings: Findings, record: ValidationRecord, source: str, head
                         f"with {findings.tool.version}.")
     for f in findings.detectors:
         m = record.method(f.name)
+        if m is None and f.status is Status.SKIPPED:
+            # A detector that did not run has no error rate to miss.
+            continue
         if m is None:
             cautions.append(f"{f.name}: not covered by this validation record; no error rate can be stated for it.")
             continue

@@ -24,11 +24,11 @@ from typing import Any
 from jinja2 import Environment, FunctionLoader, StrictUndefined
 from markupsafe import Markup
 
-from ..calibration.model import WEAK_SUPPORT_LR, supports
-from ..contracts import Processing
+from ..calibration.model import WEAK_SUPPORT_LR, supports, verbal
+from ..contracts import Processing, SourceAttribution
 from ..defaults import PAPER_SIZES
 from ..evidence import Evidence
-from ..findings import ExifSummary, Findings, Verdict
+from ..findings import ExifSummary, Findings, Status, Verdict
 from ..fusion import LR_POLICY
 from ..plugins import PluginHost, localise_map
 from ..text import visible
@@ -215,10 +215,15 @@ def command_line(findings: Findings, photo: Path) -> str:
         ("--fusion", str(p.get("fusion"))), ("--timeout", f"{p.get('timeout_s'):g}"),
         ("--max-pixels", str(p.get("max_pixels"))), ("--isolation", str(p.get("isolation"))),
     ]
-    for flag, key in (("--case-id", "case_id"), ("--examiner", "examiner"), ("--calibration", "calibration")):
+    for flag, key in (("--case-id", "case_id"), ("--examiner", "examiner"), ("--calibration", "calibration"),
+                      ("--reference", "reference")):
         if p.get(key):
             options.append((flag, str(p[key])))
+    # A detector that did not run (skipped) ran with no parameters; its defaults are its version's.
+    skipped = {f.name for f in findings.detectors if f.status is Status.SKIPPED}
     for det, params in sorted((p.get("detector_params") or {}).items()):
+        if det in skipped:
+            continue
         for key, value in sorted(params.items()):
             options.append(("--param", f"{det}.{key}={json.dumps(value, separators=(',', ':'))}"))
     lines = [f"forensics analyze {_shell_quote(str(photo))}"]
@@ -289,10 +294,14 @@ def _summary(findings: Findings) -> dict[str, Any]:
     lr_summary = _lr_summary(verdict, findings.detectors)
     processing = [{"detector": f.name, "kind": p.kind, "description": p.description}
                   for f in findings.detectors if (p := Processing.from_finding(f)) is not None]
+    sources = [{"detector": f.name, "hp": a.hp, "hd": a.hd, "basis": a.basis, "lr": wording.lr_text(a.log10_lr),
+                "verbal": verbal(a.log10_lr, "the first", "the second")}
+               for f in findings.detectors if (a := SourceAttribution.from_finding(f)) is not None]
     return {
         "statement": wording.statement(verdict),
         "screening": wording.screening(verdict),
         "processing": processing,
+        "sources": sources,
         "tension": _tension(verdict, lr_summary, rows),
         "strength": strength,
         "explanation": verdict.explanation,
@@ -420,6 +429,7 @@ def render_html(findings: Findings, evidence: Evidence, signature: SignatureInfo
         "case_id": findings.parameters.get("case_id") or NOT_GIVEN,
         "exhibit_id": options.exhibit_id or NOT_GIVEN,
         "evidence": ev,
+        "references": findings.references,
         "orientation": (_ORIENTATIONS.get(ev.orientation, str(ev.orientation)) + "; recorded, not applied"
                         if ev.orientation is not None else "not recorded"),
         "camera_rows": _camera_rows(ev.exif),

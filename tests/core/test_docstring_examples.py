@@ -16,9 +16,10 @@ import forensics_core.verify
 
 ROOT = Path(__file__).resolve().parents[2]
 
-NUMERICAL = [f"forensics_plugins.lens_distortion.{m}" for m in ("edges", "lines", "k1", "consistency", "regions")]
+NUMERICAL = ([f"forensics_plugins.lens_distortion.{m}" for m in ("edges", "lines", "k1", "consistency", "regions")]
+             + [f"forensics_plugins.prnu.{m}" for m in ("alignment", "pce", "residual")])
 DETECTORS = [f"forensics_plugins.{p}.detector" for p in ("cfa", "copy_move", "dq", "jpeg_grid", "lens_distortion",
-                                                          "metadata", "noise", "provenance")]
+                                                          "metadata", "noise", "provenance", "prnu")]
 
 
 @pytest.mark.parametrize("module", [forensics_core.analysis, forensics_core.evidence, forensics_core.report.images,
