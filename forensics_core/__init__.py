@@ -10,8 +10,10 @@ from .contracts import (
     ATTRIBUTION_KEY,
     PROCESSING_KEY,
     RADIAL_DISTORTION_KEY,
+    RADIAL_RESAMPLING_KEY,
     Processing,
     RadialDistortion,
+    RadialResampling,
     SourceAttribution,
 )
 from .findings import (
@@ -89,7 +91,9 @@ __all__ = [
     "PROCESSING_KEY",
     "Processing",
     "RADIAL_DISTORTION_KEY",
+    "RADIAL_RESAMPLING_KEY",
     "RadialDistortion",
+    "RadialResampling",
     "ReferenceError",
     "SourceAttribution",
     "ReferenceSet",

@@ -13,6 +13,8 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from typing import Any
 
+import numpy as np
+
 from .findings import DetectorFinding, Status
 
 #: The key under which a finding's ``details`` carry its :class:`RadialDistortion`.
@@ -135,6 +137,70 @@ class Processing:
         if not isinstance(record, Mapping) or not all(isinstance(record.get(k), str) for k in ("kind", "description")):
             return None
         return cls(kind=record["kind"], description=record["description"])
+
+
+#: Inside a finding's processing record, the key of its :class:`RadialResampling`.
+RADIAL_RESAMPLING_KEY = "radial"
+
+
+@dataclass(frozen=True)
+class RadialResampling:
+    """A radial warp of the whole photo about its centre, after its first compression: lens correction.
+
+    Published by the ``jpeg_grid`` detector inside its processing record
+    (``details["processing"]["radial"]``, key ``profile_terms_px``), where
+    the first compression's grid shows the warp; read by the ``cfa``
+    detector, whose mosaic the same warp moves. The content now at distance
+    ``r`` from the centre ``((W - 1) / 2, (H - 1) / 2)`` of the stored grid
+    was moved along its radius by
+
+    ``D(r) = a (r / R)^3 + b (r / R)`` pixels (outwards when positive),
+
+    ``R`` the half diagonal: the one-term radial model of the paper's eqs.
+    1-5 with the zoom an editor adds to fill the frame.
+
+    Attributes
+    ----------
+    a, b : float
+        The profile's terms, pixels.
+
+    References
+    ----------
+    .. [1] H. R. Chennamma, L. Rangarajan, Image splicing detection using
+       inherent lens radial distortion, IJCSI 7(6), 2010 (the radial model).
+    """
+
+    a: float
+    b: float
+
+    def displacement(self, y: np.ndarray, x: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+        """``(dy, dx)``, pixels: how far the content now at pixel rows ``y``, columns ``x`` was moved.
+
+        ``y`` and ``x`` broadcast together; ``shape`` is the stored grid's
+        ``(H, W)``.
+        """
+        cy, cx = (shape[0] - 1) / 2.0, (shape[1] - 1) / 2.0
+        vy, vx = np.asarray(y, dtype=np.float64) - cy, np.asarray(x, dtype=np.float64) - cx
+        r = np.maximum(np.hypot(vy, vx), 1e-9)
+        rho = r / float(np.hypot(cy, cx))
+        along = (self.a * rho**3 + self.b * rho) / r
+        return along * vy, along * vx
+
+    def to_details(self) -> dict[str, Any]:
+        """The JSON form inside the publishing finding's processing record (beside the publisher's evidence)."""
+        return {"profile_terms_px": [self.a, self.b]}
+
+    @classmethod
+    def from_finding(cls, finding: DetectorFinding | None) -> RadialResampling | None:
+        """The warp a finding stood by: None unless it names processing (:class:`Processing`) with a complete warp."""
+        if Processing.from_finding(finding) is None:
+            return None
+        record = finding.details[PROCESSING_KEY].get(RADIAL_RESAMPLING_KEY)
+        terms = record.get("profile_terms_px") if isinstance(record, Mapping) else None
+        if (not isinstance(terms, (list, tuple)) or len(terms) != 2
+                or not all(isinstance(t, (int, float)) and not isinstance(t, bool) and np.isfinite(t) for t in terms)):
+            return None
+        return cls(float(terms[0]), float(terms[1]))
 
 
 #: The key under which a finding's ``details`` carry a source statement (:class:`SourceAttribution`).

@@ -16,7 +16,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from forensics_core import Detector, DetectorFinding, DetectorResult, Evidence, Status
+from forensics_core import (
+    PROCESSING_KEY,
+    Detector,
+    DetectorFinding,
+    DetectorResult,
+    Evidence,
+    Processing,
+    RadialResampling,
+    Status,
+)
 
 from . import naming
 from .bayer import shifted
@@ -24,8 +33,9 @@ from .content_null import null_rates
 from .regions import KINDS, Question, Region, count_tests, detectable_side, scan
 from .residuals import block_features
 from .significance import clopper_pearson, log10_binom_tail
+from .spec import JPEG_GRID, SPEC
 from .votes import SHIFTS, phase_votes
-from .spec import SPEC
+from .warp import mosaic_warp
 
 if TYPE_CHECKING:
     from forensics_core import SyntheticCase
@@ -117,7 +127,7 @@ def regions_mask(details: Mapping[str, Any], shape: tuple[int, int]) -> np.ndarr
     return mask
 
 
-def analyse(pixels: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
+def analyse(pixels: np.ndarray, params: Mapping[str, Any], warp: RadialResampling | None = None) -> DetectorResult:
     """Run the detector on a photo's stored grid.
 
     Parameters
@@ -126,6 +136,13 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
         The evidence's stored grid (read only).
     params : mapping
         :data:`DEFAULT_PARAMS` with the user's overrides.
+    warp : RadialResampling, optional
+        A lens correction of the whole photo that ``jpeg_grid`` established.
+        When the blocks' votes follow the phases its displacement, rounded
+        to whole pixels, gives them, the correction is published as
+        processing (``details["processing"]``) and regions are those that
+        depart from the phase it gave each block, not from the photo's one
+        phase (:mod:`.warp`).
 
     Returns
     -------
@@ -204,9 +221,13 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     details["pattern"] = name
 
     chroma = np.stack([feats.colour, feats.green], axis=2)
+    mosaic = mosaic_warp(warp, votes.t_diag, diag_voting, block, (h, w)) if warp is not None else None
+    follows = mosaic is not None and mosaic.follows
+    # In a photo whose mosaic a lens correction moved, each block is asked about the phase the correction gave it.
+    asked = (mosaic.questions(votes.t_diag, votes.t_rb, diag_voting, rb_voting) if follows else
+             (("diagonal", votes.t_diag < 0, diag_voting), ("red_blue", votes.t_rb < 0, rb_voting)))
     questions, share = [], {}
-    for kind, disagree, voting in (("diagonal", votes.t_diag < 0, diag_voting),
-                                   ("red_blue", votes.t_rb < 0, rb_voting)):
+    for kind, disagree, voting in asked:
         null = null_rates(disagree, voting, chroma)
         # Reported: how much of the photo is of a colour that votes against as a rule.
         share[kind] = round(float((null[voting] > 0.5).mean()), 4) if voting.any() else 0.0
@@ -228,11 +249,22 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
             rec["pattern"] = shifted(name["pattern"], *SHIFTS[int(np.argmax(counts))])
     details["regions"] = regions
     details["min_log10_nfa"] = round(result.min_log10_nfa, 3)
+    if follows:
+        details[PROCESSING_KEY] = {
+            **Processing("radial resampling", "resampled by a radial warp about its centre, which moved its colour "
+                         "mosaic by whole pixels in rings, as lens correction does").to_details(),
+            "mosaic": mosaic.record(),
+        }
+    elif mosaic is not None:
+        details["warp_checked"] = mosaic.record()
     details["elapsed_s"] = timer.marks
 
     # The photo's own trace is judged outside the regions, which would dilute it.
     outside = diag_voting & ~np.any([r.blocks for r in result.regions], axis=0) if regions else diag_voting
-    host = _rate(int((outside & (votes.t_diag > 0)).sum()), int(outside.sum()))
+    if follows:
+        host = _rate(*mosaic.agreement(votes.t_diag, outside))
+    else:
+        host = _rate(int((outside & (votes.t_diag > 0)).sum()), int(outside.sum()))
     fraction = _power((ny, nx), host["rate"], vote_rate, n_tests, eps)["fraction"]
     details["power"]["diagonal_outside_regions"] = fraction
     if fraction is None or fraction > float(params["max_detectable_fraction"]):
@@ -261,6 +293,18 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     )
 
 
+def _processing_text(details: dict[str, Any]) -> str:
+    """The processing the mosaic shows, as a sentence for the summary (empty when none)."""
+    processing = details.get(PROCESSING_KEY)
+    if not processing:
+        return ""
+    m = processing["mosaic"]
+    p = f"{10 ** m['log10_p']:.1g}" if m["log10_p"] > -300 else f"10^{m['log10_p']:.0f}"
+    return (f" The mosaic follows the lens correction that jpeg_grid found, moved by its displacement rounded to "
+            f"whole pixels (blocks agree with the phase it predicts on {m['agree']} of {m['votes']}, p = {p}): "
+            "that is processing, and each block was judged against the phase the correction gave it.")
+
+
 def _nfa_text(log10_nfa: float) -> str:
     """An NFA for a sentence; powers of ten below what a float holds."""
     return f"{10 ** log10_nfa:.2g}" if log10_nfa > -300 else f"10^{log10_nfa:.0f}"
@@ -268,6 +312,9 @@ def _nfa_text(log10_nfa: float) -> str:
 
 def _headline(details: dict[str, Any], regions: list[dict[str, Any]], nfa: float) -> str:
     """The finding in one sentence for page 1: where a region departs, or the phase held throughout."""
+    if not regions and PROCESSING_KEY in details:
+        return (f"The mosaic follows a lens correction's warp (processing); no region departs from the phase it gave "
+                f"each block (smallest NFA {nfa:.2g}).")
     if not regions:
         return (f"One demosaicing phase throughout (blocks agree at {details['diagonal']['rate']:.2f}); no region "
                 f"departs (smallest NFA {nfa:.2g}).")
@@ -282,6 +329,10 @@ def _summary(details: dict[str, Any], regions: list[dict[str, Any]], nfa: float)
     pattern = details["pattern"]["pattern"]
     where = f"a {pattern} Bayer mosaic" if pattern else "a Bayer mosaic (pattern name undetermined)"
     rate = details["diagonal"]["rate"]
+    processing = _processing_text(details)
+    if not regions and processing:
+        return (f"The photo carries the trace of {where}; no region departs from the phase its lens correction gave "
+                f"each block (smallest NFA {nfa:.2g}).{processing}")
     if not regions:
         frac = details["power"]["diagonal"]["fraction"]
         return (f"The photo carries the trace of {where} in one phase throughout (blocks agree at a rate of "
@@ -290,8 +341,9 @@ def _summary(details: dict[str, Any], regions: list[dict[str, Any]], nfa: float)
     r = regions[0]
     kind = "green on the other diagonal" if r["kind"] == "diagonal" else "red and blue swapped"
     more = f" and {len(regions) - 1} more" if len(regions) > 1 else ""
-    return (f"Region 1{more} ({100 * r['area_fraction']:.1f}% of the photo, {kind}) disagrees with the photo's "
-            f"demosaicing phase ({where}), NFA = {_nfa_text(r['log10_nfa'])}.")
+    against = "the phase the photo's lens correction gave it" if processing else "the photo's demosaicing phase"
+    return (f"Region 1{more} ({100 * r['area_fraction']:.1f}% of the photo, {kind}) disagrees with {against} "
+            f"({where}), NFA = {_nfa_text(r['log10_nfa'])}.{processing}")
 
 
 class ColourFilterArray(Detector):
@@ -325,9 +377,14 @@ class ColourFilterArray(Detector):
 
     spec = SPEC
 
-    def analyze(self, evidence: Evidence, params: Mapping[str, Any]) -> DetectorResult:
-        """The stored RGB grid's per-block phase votes and the regions that vote for another phase."""
-        return analyse(evidence.pixels, params)
+    def analyze(self, evidence: Evidence, params: Mapping[str, Any],
+                prior: Mapping[str, DetectorFinding] | None = None) -> DetectorResult:
+        """The stored RGB grid's per-block phase votes and the regions that vote for another phase.
+
+        ``prior`` may hold ``jpeg_grid``'s finding: a lens correction it
+        established explains the regions its warp moved onto the other diagonal.
+        """
+        return analyse(evidence.pixels, params, RadialResampling.from_finding((prior or {}).get(JPEG_GRID)))
 
     def report_section(self, finding: DetectorFinding, evidence: Evidence) -> ReportSection | None:
         """The vote map, the flagged regions and their tests; the generic section when no thresholds were set."""

@@ -5,7 +5,7 @@ from __future__ import annotations
 from importlib.resources import files
 from typing import Any
 
-from forensics_core import DetectorFinding, Evidence, Status
+from forensics_core import PROCESSING_KEY, DetectorFinding, Evidence, Status
 from forensics_core.report import Figure, ReportSection, Table
 
 from .spec import REFERENCES
@@ -75,12 +75,15 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
     regions = d.get("regions", [])
     thresholds = d.get("thresholds", {})
     pattern = d.get("pattern") or {}
+    # After a lens correction each block is judged against the phase the correction gave it.
+    phase = ("the phase the lens correction gave each block" if PROCESSING_KEY in d
+             else "the photo's demosaicing phase")
     if finding.status is not Status.OK:
         decision = "no decision: the photo does not carry enough of the trace"
     elif regions:
-        decision = f"{len(regions)} region(s) disagree with the photo's demosaicing phase"
+        decision = f"{len(regions)} region(s) disagree with {phase}"
     else:
-        decision = "no region disagrees with the photo's demosaicing phase"
+        decision = f"no region disagrees with {phase}"
     power = d.get("power", {})
     context = {
         "reason": d.get("reason"),

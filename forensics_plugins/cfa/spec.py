@@ -11,7 +11,9 @@ from typing import Any
 from forensics_core import DetectorSpec
 
 NAME = "cfa"
-VERSION = "1.1.0"
+VERSION = "1.2.0"
+#: Its lens-correction warp explains regions of the other diagonal (:mod:`forensics_plugins.cfa.warp`).
+JPEG_GRID = "jpeg_grid"
 
 REFERENCES = (
     "A. C. Popescu, H. Farid, Exposing digital forgeries in color filter array interpolated images, "
@@ -57,4 +59,5 @@ SPEC = DetectorSpec(
     # ways the null model (checked on camera JPEGs and lossless files) does
     # not describe.
     formats=("JPEG", "MPO", "PNG", "TIFF"),
+    uses=(JPEG_GRID,),
 )

@@ -48,7 +48,17 @@ import numpy as np
 from PIL import Image
 from scipy import ndimage
 
-from forensics_core import PROCESSING_KEY, Detector, DetectorFinding, DetectorResult, Evidence, Processing, Status
+from forensics_core import (
+    PROCESSING_KEY,
+    RADIAL_RESAMPLING_KEY,
+    Detector,
+    DetectorFinding,
+    DetectorResult,
+    Evidence,
+    Processing,
+    RadialResampling,
+    Status,
+)
 
 from .earlier_grid import CELLS, LEAD, MIN_CELL_SHARE, MIN_CELL_SHARE_ALL, EarlierGrid, earlier_grid
 from .lattice import FREQUENCIES, MIN_FREQUENCIES, block_any, block_coefficients, estimate_steps, missing_regions, \
@@ -382,10 +392,10 @@ def _processing(warp: RadialWarp | None, n_warped: int, earlier: EarlierGrid | N
     if warp is not None:
         done.append("resampled by a radial warp about its centre after a first JPEG compression, as lens "
                     "correction does")
-        out["radial"] = {
+        out[RADIAL_RESAMPLING_KEY] = {
             "direction": "outwards" if warp.at_corner_px > 0 else "inwards",
             "first_grid_origin": list(warp.origin),
-            "profile_terms_px": [round(t, 2) for t in warp.terms],
+            **RadialResampling(*(round(t, 2) for t in warp.terms)).to_details(),
             "n_regions": n_warped,
             "region_ids_listed": [r["id"] for r in records if r["stage"] == "resampled"],
             "shift_at_half_diagonal_px": round(warp.at_corner_px, 2),

@@ -8,7 +8,7 @@ import pytest
 from PIL import Image
 from scipy import ndimage
 
-from forensics_core import DetectorFinding, EvidenceError, Processing, Status, load_evidence
+from forensics_core import DetectorFinding, EvidenceError, Processing, RadialResampling, Status, load_evidence
 from forensics_core.findings import check_result
 from forensics_plugins.jpeg_grid import synth
 from forensics_plugins.jpeg_grid.detector import JpegGrid, ijg_quality
@@ -334,6 +334,11 @@ def test_lens_correction_is_named_processing_and_a_piece_pasted_into_it_is_still
     assert Processing.from_finding(finding) == Processing(
         "radial resampling", "resampled by a radial warp about its centre after a first JPEG compression, as lens "
         "correction does")
+    # The warp itself is published for the cfa detector, whose mosaic it moves too.
+    warp = RadialResampling.from_finding(finding)
+    assert warp is not None and [warp.a, warp.b] == processing["radial"]["profile_terms_px"]
+    corner = warp.displacement(np.array([0.0]), np.array([0.0]), corrected.shape[:2])
+    assert (corner[0][0] < 0) == (processing["radial"]["direction"] == "outwards")
 
     _pasted_piece_is_found(tmp_path, rng, corrected, (3, 5), (slice(450, 750), slice(350, 650)))
 
