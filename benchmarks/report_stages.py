@@ -1,8 +1,10 @@
 """Where the time of one signed report goes: wall and CPU time of each stage, and the least time they allow.
 
-Usage: ``python benchmarks/report_stages.py [--runs 5] [--mp 3] [--baseline SOURCE_TREE]``
+Usage: ``python benchmarks/report_stages.py [--runs 5] [--mp 3 | --photo PATH] [--baseline SOURCE_TREE]``
 
-Each run analyses the photo of :mod:`end_to_end` (``--mp`` megapixels) with
+Each run analyses the photo of :mod:`end_to_end` (``--mp`` megapixels), or
+the given photo (e.g. the bundled camera photo
+``tests/data/exif/87_OSError.jpg``), with
 ``analyze --format json,html,pdf`` in a fresh process and times, by wrapping
 the functions the pipeline calls: intake (``load_evidence``), the detectors
 (``analyze_evidence``, in forked children), the detector sections and the
@@ -107,9 +109,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--mp", type=float, default=3.0, help="Megapixels of the photo (4:3).")
+    parser.add_argument("--photo", type=Path, help="Time this photo instead of a synthetic one.")
     parser.add_argument("--baseline", type=Path, help="Source tree of the version to compare with.")
     args = parser.parse_args()
-    target = photo(args.mp)
+    target = args.photo.resolve() if args.photo else photo(args.mp)
     trees = [("this tree", None)] + ([("baseline", args.baseline.resolve())] if args.baseline else [])
     for _, tree in trees:
         print(compile_sources(tree or ROOT))

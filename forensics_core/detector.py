@@ -146,7 +146,9 @@ class Detector:
         about a page and at most two: what was measured on this photo, the
         key figure (``{{ figures.key.beside(mm) }}`` or ``.fit(mm)`` size
         it), a short table, method, limits and references. Return None (the
-        default) for the core's generic section.
+        default) for the core's generic section. Not called for a finding
+        whose status is ``skipped``: the report gives its status and reason
+        in one line.
         """
         return None
 

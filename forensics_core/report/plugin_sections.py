@@ -29,7 +29,7 @@ from PIL import Image
 from ..containment import Child, PluginFault, can_fork, jobs_for, wait_any
 from ..detector import Detector, implements
 from ..evidence import Evidence
-from ..findings import DetectorFinding
+from ..findings import DetectorFinding, Status
 from ..plugins import PluginHost, one_line
 from . import images
 from .sections import Figure, ReportSection, Table
@@ -302,7 +302,9 @@ def sections_for(host: PluginHost | None, findings: Sequence[DetectorFinding], e
     pending: list[tuple[int, Callable[[], DetectorSection | None]]] = []
     for i, finding in enumerate(findings):
         entry = host.registered(finding) if host is not None else None
-        if entry is None or not implements(entry.detector, "report_section"):
+        # A detector that was not applied measured nothing: its entry is its status and reason, and its plugin is
+        # not imported for it.
+        if entry is None or finding.status is Status.SKIPPED or not implements(entry.detector, "report_section"):
             out[i] = DetectorSection(finding, finding.name)
         elif can_fork():
             pending.append((i, partial(_rendered, entry.detector, finding, evidence)))

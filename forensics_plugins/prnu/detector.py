@@ -127,9 +127,6 @@ class Prnu(Detector):
         return mask
 
     def report_section(self, finding, evidence):
-        if finding.status is Status.SKIPPED:
-            # Nothing was measured: the core's short entry (status and reason) says all there is.
-            return None
         from .section import section
 
         return section(finding, evidence)

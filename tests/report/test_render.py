@@ -359,3 +359,20 @@ def test_the_report_says_when_the_screen_and_the_likelihood_ratio_point_differen
             assert "(copy_move state none and are left out of it)" in text
     verdict.policy = "likelihood_ratio"
     assert _tension(verdict, {"contributed": "copy_move"}, rows) is None
+
+
+def test_a_skipped_detector_s_section_hook_is_not_called(tmp_path):
+    # Nothing was measured, so there is nothing for the plugin to show, and its module is not imported for it.
+    from dataclasses import replace
+
+    from forensics_core import Status
+    from forensics_core.analysis import Options, analyze_evidence
+    from forensics_core.report.plugin_sections import sections_for
+
+    evidence = load_evidence(hostile_jpeg(tmp_path / "p.jpg"))
+    host = report_host("section_raising")
+    findings = analyze_evidence(evidence, host, Options(isolation="inline"))
+    skipped = replace(findings.detectors[0], status=Status.SKIPPED, summary="Not applied: no references.")
+    section = sections_for(host, [skipped], evidence)[0]
+    assert section.failure is None and section.body is None
+    assert sections_for(host, [findings.detectors[0]], evidence)[0].failure
