@@ -2,5 +2,6 @@
 
 from .images import display_image, figure_png
 from .sections import Figure, ReportSection, Table
+from .wording import lr_text
 
-__all__ = ["Figure", "ReportSection", "Table", "display_image", "figure_png"]
+__all__ = ["Figure", "ReportSection", "Table", "display_image", "figure_png", "lr_text"]

@@ -20,6 +20,7 @@ images", Proc. SPIE 6819, 2008.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from scipy.ndimage import zoom
@@ -126,12 +127,15 @@ def single_test_z(peak: Peak) -> float:
     return float(norm.isf(min(p, 1.0 - 1e-12)))
 
 
-def aligned(array: np.ndarray, peak: Peak, fingerprint: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The photo's ``array`` turned as ``peak`` says, and the part of the fingerprint it lies on (same shape)."""
-    turned = _turned(array, peak.rotation)
+def aligned(arrays: Sequence[np.ndarray], peak: Peak,
+            fingerprint: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+    """The photo's ``arrays`` (same shape) turned as ``peak`` says, and the part of the fingerprint they lie on.
+
+    The fingerprint is resampled once for all of them when the photo was scaled.
+    """
+    turned = [_turned(array, peak.rotation) for array in arrays]
+    h, w = turned[0].shape[:2]
     if peak.scale != 1.0:
-        k = zoom(fingerprint, (turned.shape[0] / fingerprint.shape[0], turned.shape[1] / fingerprint.shape[1]),
-                 order=1)
-        return turned, k
+        return turned, zoom(fingerprint, (h / fingerprint.shape[0], w / fingerprint.shape[1]), order=1)
     dy, dx = peak.shift
-    return turned, fingerprint[dy: dy + turned.shape[0], dx: dx + turned.shape[1]]
+    return turned, fingerprint[dy: dy + h, dx: dx + w]

@@ -111,8 +111,7 @@ def _local(job: tuple[str, str | None, int, int, int, str, str]) -> dict:
     k = np.load(fingerprint)
     residual, intensity = test_residual(pixels)
     peak = best_alignment(intensity * residual, k)
-    turned_residual, kk = aligned(residual, peak, k)
-    turned_intensity, _ = aligned(intensity, peak, k)
+    (turned_residual, turned_intensity), kk = aligned((residual, intensity), peak, k)
     p = DEFAULT_PARAMS
     local = local_map(turned_residual, turned_intensity, kk, p["block"], p["block"] // 4)
     flagged, best = regions(local, p["region_llr"])

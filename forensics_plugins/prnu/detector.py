@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from forensics_core import ATTRIBUTION_KEY, Detector, DetectorResult, Evidence, ReferenceSet, SourceAttribution, Status
+from forensics_core.report import lr_text
 
 from .alignment import aligned, best_alignment, single_test_z
 from .cache import fingerprint_for
@@ -27,11 +28,6 @@ from .spec import SPEC
 
 HP_SOURCE = "the photo was taken by the camera that took the reference photos"
 HD_SOURCE = "the photo was taken by another camera of the same model"
-
-
-def _lr_text(log10_lr: float) -> str:
-    value = 10.0 ** log10_lr
-    return f"{value:.3g}" if value >= 1 else f"1/{1 / value:.3g}"
 
 
 class Prnu(Detector):
@@ -84,7 +80,7 @@ class Prnu(Detector):
         attribution = (f"PCE {peak.pce:.4g} at rotation {peak.rotation} deg, shift {peak.shift}, scale "
                        f"{peak.scale:.3g} ({peak.searched} alignments searched)")
         if source is not None:
-            attribution += (f"; source LR {_lr_text(source)} for \"taken by the reference camera\" against "
+            attribution += (f"; source LR {lr_text(source)} for \"taken by the reference camera\" against "
                             f"\"another camera of the same model\"")
         if peak.pce < params["min_pce"]:
             return DetectorResult(
@@ -92,8 +88,7 @@ class Prnu(Detector):
                 f"The reference camera's fingerprint was not found in the photo ({attribution}; below the detection "
                 f"threshold {params['min_pce']:g}), so no part of it can be checked for the fingerprint.",
                 details=details, headline=f"Fingerprint not found (PCE {peak.pce:.3g}); parts not checked.")
-        turned_residual, k = aligned(residual, peak, fingerprint.k)
-        turned_intensity, _ = aligned(intensity, peak, fingerprint.k)
+        (turned_residual, turned_intensity), k = aligned((residual, intensity), peak, fingerprint.k)
         block = int(params["block"])
         local = local_map(turned_residual, turned_intensity, k, block, max(1, block // 4))
         flagged, best = regions(local, float(params["region_llr"]))
