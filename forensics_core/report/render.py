@@ -292,8 +292,16 @@ def _summary(findings: Findings) -> dict[str, Any]:
         reading = ("Under this policy the screen is the fused likelihood ratio compared with thresholds fixed in "
                    "advance; the statement above gives its value.")
     lr_summary = _lr_summary(verdict, findings.detectors)
-    processing = [{"detector": f.name, "kind": p.kind, "description": p.description}
-                  for f in findings.detectors if (p := Processing.from_finding(f)) is not None]
+    # One line per kind of processing: two detectors that see one lens correction in two traces state one fact.
+    processing: list[dict[str, Any]] = []
+    for f in findings.detectors:
+        if (p := Processing.from_finding(f)) is None:
+            continue
+        seen = next((q for q in processing if q["kind"] == p.kind), None)
+        if seen is None:
+            processing.append({"detectors": [f.name], "kind": p.kind, "description": p.description})
+        else:
+            seen["detectors"].append(f.name)
     sources = [{"detector": f.name, "hp": a.hp, "hd": a.hd, "basis": a.basis, "lr": wording.lr_text(a.log10_lr),
                 "verbal": verbal(a.log10_lr, "the first", "the second")}
                for f in findings.detectors if (a := SourceAttribution.from_finding(f)) is not None]

@@ -4,7 +4,7 @@ import io
 
 from PIL import Image
 
-from forensics_core import Detector, DetectorResult, DetectorSpec, Status, hookimpl
+from forensics_core import PROCESSING_KEY, Detector, DetectorResult, DetectorSpec, Processing, Status, hookimpl
 from forensics_core.report import Figure, ReportSection
 
 HOSTILE = '<script>alert("x")</script>'
@@ -124,7 +124,34 @@ class NoSection(_Detector):
     name = "no_section"
 
 
+class _Processed(_Detector):
+    """Names global processing, as jpeg_grid and cfa do for a lens correction."""
+
+    kind = "radial resampling"
+    description = "resampled by a radial warp about its centre, as lens correction does"
+
+    def analyze(self, evidence, params):
+        return DetectorResult(Status.OK, f"{self.name} saw processing.", score=0.0, p_value=1.0,
+                              details={PROCESSING_KEY: Processing(self.kind, self.description).to_details()})
+
+
+class ProcessedGrid(_Processed):
+    name = "processed_grid"
+
+
+class ProcessedMosaic(_Processed):
+    name = "processed_mosaic"
+    description = "resampled by a radial warp about its centre, which moved its colour mosaic"
+
+
+class ProcessedCrop(_Processed):
+    name = "processed_crop"
+    kind = "crop after compression"
+    description = "cropped off the block grid after a first JPEG compression and saved again"
+
+
 sectioned, section_raising, section_wrong_type = Sectioned(), SectionRaising(), SectionWrongType()
 section_escapes, section_fetches, no_section = SectionEscapes(), SectionFetches(), NoSection()
 section_hanging, section_exiting = SectionHanging(), SectionExiting()
 section_template_hanging = SectionTemplateHanging()
+processed_grid, processed_mosaic, processed_crop = ProcessedGrid(), ProcessedMosaic(), ProcessedCrop()

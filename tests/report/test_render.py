@@ -376,3 +376,12 @@ def test_a_skipped_detector_s_section_hook_is_not_called(tmp_path):
     section = sections_for(host, [skipped], evidence)[0]
     assert section.failure is None and section.body is None
     assert sections_for(host, [findings.detectors[0]], evidence)[0].failure
+
+
+def test_one_processing_seen_by_two_detectors_is_one_line_on_page_one(tmp_path):
+    # jpeg_grid and cfa both name a lens correction (in the JPEG grid and in the mosaic): one fact, one line.
+    report = render(hostile_jpeg(tmp_path / "p.jpg"), "processed_grid", "processed_mosaic", "processed_crop")
+    lines = re.findall(r"Processing, not manipulation \(([^)]*)\):</strong>\s*the photo was ([^.]*)\.", report.html)
+    assert lines == [("processed_crop", "cropped off the block grid after a first JPEG compression and saved again"),
+                     ("processed_grid, processed_mosaic",
+                      "resampled by a radial warp about its centre, as lens correction does")]
