@@ -291,7 +291,7 @@ def analyse(luma: np.ndarray, params: Mapping[str, Any]) -> DetectorResult:
     result = assess([line.points for line in lines], shape, alpha=float(params["alpha"]),
                     min_lines=int(params["min_lines"]), single_lines=bool(params["single_lines"]),
                     tau_k1=float(params["tau_k1"]), bow_rel=float(params["bow_rel"]), dof=float(params["dof"]),
-                    tau_photo=float(params["tau_photo"]))
+                    tau_photo=float(params["tau_photo"]), centre_prior_sd=float(params["centre_sd"]))
     t = timer.lap("consistency", t)
     records = _line_records(lines, shape, result, params)
     timer.lap("per_line_k1", t)

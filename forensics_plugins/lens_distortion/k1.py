@@ -461,6 +461,11 @@ def fit_lines(
     s = _Stacked.of(lines_norm)
     c = np.asarray(centre, dtype=np.float64)
     params = _levenberg_marquardt(s, _initial_lines(s, np.full(s.counts.size, k1_start)), k2, c)
+    return _line_fits(s, params, k2, c, scale_px)
+
+
+def _line_fits(s: _Stacked, params: np.ndarray, k2: float, c: np.ndarray, scale_px: float) -> list[LineK1]:
+    """Each line's :class:`LineK1` at its fitted ``(k1, theta, rho)``, ``params`` shape (m, 3)."""
     residual, jac = _line_model(s, params, k2, c)
     normal = s.sum(jac[:, :, None] * jac[:, None, :])
     # Schur complement: information on k1 left after the line's own (theta, rho).
@@ -542,5 +547,16 @@ def fit_lines_multistart(
     several minima, and a start at ``k1 = 0`` can stall; without a good start
     from elsewhere (a global model), try several.
     """
-    runs = [fit_lines(lines_norm, scale_px, k2=k2, centre=centre, k1_start=start) for start in _K1_STARTS]
-    return [min(fits, key=lambda f: (not np.isfinite(f.residual_rms_px), f.residual_rms_px)) for fits in zip(*runs)]
+    s = _Stacked.of(lines_norm)
+    c = np.asarray(centre, dtype=np.float64)
+    # The starting line of each (its TLS fit) does not depend on the start of k1, and the statistics are
+    # computed once, for each line's best fit: the same fits as separate runs, in a third of the time.
+    base = _initial_lines(s, np.zeros(s.counts.size))
+    runs, costs = [], []
+    for start in _K1_STARTS:
+        params = _levenberg_marquardt(s, np.column_stack((np.full(s.counts.size, start), base[:, 1:])), k2, c)
+        cost = s.sum(_line_model(s, params, k2, c)[0] ** 2)
+        runs.append(params)
+        costs.append(np.where(np.isfinite(cost), cost, np.inf))
+    best = np.argmin(np.stack(costs), axis=0)
+    return _line_fits(s, np.stack(runs)[best, np.arange(best.size)], k2, c, scale_px)

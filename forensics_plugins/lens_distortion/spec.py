@@ -10,14 +10,14 @@ from typing import Any
 
 from forensics_core import DetectorSpec
 
-from .error_model import BOW_REL, DOF, TAU_K1, TAU_PHOTO
+from .error_model import BOW_REL, CENTRE_SD, DOF, TAU_K1, TAU_PHOTO
 
 #: What the synthetic generator makes (``forensics synth --kind``): an authentic
 #: photo and the paper's three kinds of splice.
 KINDS = ("authentic", "copy_move", "other_camera", "other_zoom")
 
 NAME = "lens_distortion"
-VERSION = "0.4.0"
+VERSION = "0.5.0"
 
 REFERENCES = (
     "H. R. Chennamma, L. Rangarajan, Image splicing detection using inherent lens radial distortion, "
@@ -46,6 +46,7 @@ DEFAULT_PARAMS: dict[str, Any] = {
     "bow_rel": BOW_REL,
     "dof": DOF,
     "tau_photo": TAU_PHOTO,
+    "centre_sd": CENTRE_SD,
 }
 
 SPEC = DetectorSpec(
