@@ -31,8 +31,10 @@ Foreign regions that processing of the whole photo explains are published
 as that processing (``details["processing"]``), not as evidence: a first
 grid found all over the frame besides the main one, as a crop after a first
 compression leaves (:mod:`.earlier_grid`), and first grids shifted along
-each radius by one profile, as a lens correction leaves (:mod:`.resampling`).
-Regions neither explains stay foreign.
+each radius by one profile, as a lens correction leaves (:mod:`.resampling`);
+without such a profile, a region whose grid is the first moved one pixel
+along its own radius is possible processing (:func:`.resampling.radial_steps`).
+Regions none of these explains stay foreign.
 """
 
 from __future__ import annotations
@@ -67,7 +69,7 @@ from .luminance import MIN_SIDE, Luminance, luminance
 from .nfa import finite_log10, log10_binomial_tail, nfa_text
 from .regions import P_VOTE, W, Region, find_regions, log10_n_tests, min_region_pixels
 from .resampling import MIN_FIELD_SHARE, MIN_REGIONS, MIN_SPREAD_DEG, PERP_TOL, PROFILE_REL, PROFILE_TOL, RadialWarp, \
-    field_explained, radial_warp
+    field_explained, radial_steps, radial_warp
 from .votes import grid_code, grid_origin, vote_map
 from .zeros import ZERO_THRESHOLD, flat_blocks, zero_counts
 from .spec import SPEC
@@ -152,7 +154,8 @@ def _region_tiles(labels: np.ndarray, region: Region, cell: int) -> np.ndarray:
 
 def _region_record(i: int, stage: str, region: Region, tiles: np.ndarray, cell: int, shape: tuple[int, int],
                    log10_threshold: float, explained: bool = False) -> dict[str, Any]:
-    """One region as published; ``stage`` is ``"resampled"`` or ``"cropped"`` when processing explains it."""
+    """One region as published; ``stage`` is ``"resampled"``, ``"cropped"`` or ``"radial step"`` when processing
+    explains it."""
     dx, dy = grid_origin(region.grid)
     x0, y0, x1, y1 = region.bbox
     bbox_area = (x1 - x0 + 1) * (y1 - y0 + 1)
@@ -259,6 +262,11 @@ def _processing_text(processing: dict[str, Any] | None) -> str:
     if saved:
         out += (f" The photo was {saved['done']}: {saved['evidence']}. That is processing, not a trace of a pasted "
                 f"piece.")
+    step = processing.get("radial_step")
+    if step:
+        out += (f" {step['n_regions']} region(s) vote for the first grid moved by one pixel along their own radius, "
+                f"as where a lens correction moved the pixels by about one; too few to establish the warp, they "
+                f"are read as possible processing, not as a pasted piece.")
     warp = processing.get("radial")
     if warp:
         profile = warp["profile_px"]
@@ -298,7 +306,7 @@ def _summary(details: dict[str, Any]) -> str:
     crop += processing
     lead = f"Main JPEG grid at origin ({dx}, {dy}) (NFA {nfa_text(main['log10_nfa'])})"
     if not hits:
-        candidates = [r for r in details["regions"] if r["stage"] not in ("resampled", "cropped")]
+        candidates = [r for r in details["regions"] if r["stage"] not in ("resampled", "cropped", "radial step")]
         best = candidates[0]["log10_nfa"] if candidates else None
         tail = "" if best is None else f" (strongest candidate NFA {nfa_text(best)})"
         return f"{lead}; no region votes significantly for another grid{tail}.{crop}"
@@ -364,18 +372,31 @@ def _saved_again(lum: Luminance, significant: bool, details: dict[str, Any]) -> 
 
 
 def _processing(warp: RadialWarp | None, n_warped: int, earlier: EarlierGrid | None, n_cropped: int,
-                records: list[dict[str, Any]], saved: dict[str, Any] | None) -> dict[str, Any] | None:
+                records: list[dict[str, Any]], saved: dict[str, Any] | None,
+                n_stepped: int = 0) -> dict[str, Any] | None:
     """The processing the grid shows: what it is, the regions it explains and its evidence (None when none).
 
     A compression before the file's own (``saved``) is named only where no
     crop or warp is, whose descriptions already start from a first compression.
     """
-    if warp is None and earlier is None:
+    if warp is None and earlier is None and not n_stepped:
         if saved is None:
             return None
         return {**Processing(saved["kind"], saved["done"]).to_details(), "saved_again": saved}
     done = []
     out: dict[str, Any] = {}
+    if n_stepped:
+        done.append("possibly resampled by a radial warp about its centre after a first JPEG compression, as lens "
+                     "correction does")
+        out["radial_step"] = {
+            "n_regions": n_stepped,
+            "region_ids_listed": [r["id"] for r in records if r["stage"] == "radial step"],
+            "rule": (f"with no warp established (fewer than {MIN_REGIONS} regions in directions "
+                     f"{MIN_SPREAD_DEG:g} degrees apart), a region whose grid is the first grid moved by one pixel "
+                     f"(0.5 to 1.5, either way) along its own radius, rounded, as where a lens correction's "
+                     f"displacement nears one pixel; a pasted piece's grid lands there by chance for about 2 to 4 "
+                     f"of the 63 other grids"),
+        }
     if earlier is not None:
         done.append("cropped off the block grid after a first JPEG compression and saved again")
         out["crop"] = {
@@ -408,7 +429,8 @@ def _processing(warp: RadialWarp | None, n_warped: int, earlier: EarlierGrid | N
                      f"its grid is within 1 px of the shift the profile predicts at each pixel on at least "
                      f"{100 * MIN_FIELD_SHARE:g} % of its pixels"),
         }
-    kind = " and ".join(k for k, x in (("crop after compression", earlier), ("radial resampling", warp)) if x)
+    kind = " and ".join(k for k, x in (("crop after compression", earlier), ("radial resampling", warp),
+                                        ("possible radial resampling", n_stepped)) if x)
     return {**Processing(kind, "; and ".join(done)).to_details(), **out}
 
 
@@ -531,17 +553,21 @@ def analyse_luminance(lum: Luminance, params: Mapping[str, Any],
     if warp is not None:
         warp, by_field = field_explained(warp, [f[1] for f in rest], labels)
         warped = {id(rest[i]) for i in by_field}
-    explained_ids = cropped | warped
+    unexplained = [f for f in rest if id(f) not in warped]
+    stepped = set() if warp is not None else {id(unexplained[i]) for i in radial_steps(
+        [f[1] for f in unexplained], origins, shape)}
+    explained_ids = cropped | warped | stepped
     evidence = [f for f in meaningful if id(f) not in explained_ids]
     # Without a detection, the strongest candidate is kept to show how far it was from one.
     explained = [f for f in meaningful if id(f) in explained_ids]
     listed = (evidence + explained)[: int(params["max_regions_listed"])] if meaningful else found[:1]
-    stages = ["cropped" if id(f) in cropped else "resampled" if id(f) in warped else f[0] for f in listed]
+    stages = ["cropped" if id(f) in cropped else "resampled" if id(f) in warped else
+              "radial step" if id(f) in stepped else f[0] for f in listed]
     details["regions"] = [_region_record(i + 1, stage, f[1], f[2](), cell, shape, log10_threshold, stage != f[0])
                           for i, (f, stage) in enumerate(zip(listed, stages))]
     details["n_meaningful"] = len(evidence)
     details[PROCESSING_KEY] = _processing(warp, len(warped), earlier, len(cropped), details["regions"],
-                                          _saved_again(lum, significant, details))
+                                          _saved_again(lum, significant, details), len(stepped))
     _timed(marks, "report_data", t)
     details["elapsed_s"] = marks
     if not significant and not evidence and warp is None:

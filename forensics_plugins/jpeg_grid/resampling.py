@@ -95,6 +95,11 @@ _REFITS = 3
 _FINALISTS = 50
 #: Two regions closer in distance than this share of the half diagonal cannot separate the two terms.
 MIN_RADIUS_GAP = 0.05
+#: Widest range of directions (seen from the centre) a region read as a one-pixel step may span.
+STEP_MAX_SPAN_DEG = 30.0
+#: Points per side of a region box's middle half, and radial moves (pixels), over which a one-pixel step is rounded.
+_STEP_SAMPLES = 5
+_STEP_LENGTHS = np.linspace(0.5, 1.5, 11)
 #: Representatives of a shift modulo 8 within this many periods of it.
 _WRAPS = np.array([(i, j) for i in range(-6, 7) for j in range(-6, 7)], dtype=np.float64)
 
@@ -315,6 +320,67 @@ def field_explained(warp: RadialWarp, regions: Sequence[Region], labels: np.ndar
             a, b, best = float(a2), float(b2), again
     refitted = RadialWarp((a, b), a + b, warp.explained, warp.profile, warp.origin)
     return refitted, sorted(set(warp.explained) | set(np.flatnonzero(best).tolist()))
+
+
+def _one_pixel_steps(bbox: tuple[int, int, int, int], centre: np.ndarray) -> set[tuple[int, int]]:
+    """The shifts, modulo 8, that a radial move of one pixel (0.5 to 1.5, either way) rounds to in a box's middle.
+
+    Empty when the box spans more than ``STEP_MAX_SPAN_DEG`` of directions
+    seen from the centre: there every one-pixel shift is radial somewhere,
+    and a region voting for one grid throughout cannot be a step.
+    """
+    x0, y0, x1, y1 = bbox
+    corners = np.array([(x0, y0), (x1, y0), (x0, y1), (x1, y1)], dtype=np.float64) - centre
+    if np.any(np.hypot(*corners.T) < 1.0) or _spread_deg(np.arctan2(corners[:, 1], corners[:, 0])) > STEP_MAX_SPAN_DEG:
+        return set()
+    middle = np.linspace(0.25, 0.75, _STEP_SAMPLES)
+    xs, ys = np.meshgrid(x0 + middle * (x1 - x0), y0 + middle * (y1 - y0))
+    v = np.column_stack((xs.ravel(), ys.ravel())) - centre
+    u = v / np.hypot(*v.T)[:, None]
+    d = np.concatenate((-_STEP_LENGTHS, _STEP_LENGTHS))
+    moved = np.rint(u[:, None, :] * d[None, :, None]).astype(int).reshape(-1, 2) % 8
+    return {(int(a), int(b)) for a, b in moved if (a, b) != (0, 0)}
+
+
+def radial_steps(regions: Sequence[Region], origins: Sequence[tuple[int, int]],
+                 shape: tuple[int, int]) -> list[int]:
+    """The regions whose grid is the first grid moved by one pixel along their own radius.
+
+    Where too few regions survive to establish a warp (``MIN_REGIONS`` in
+    directions ``MIN_SPREAD_DEG`` apart), the band where a lens
+    correction's displacement nears one pixel may still leave one: the
+    first grid moved by ``D u`` rounded to whole pixels, ``|D|`` between 0.5
+    and 1.5. A pasted piece's grid lands on one of those shifts by chance
+    for 2 to 4 of the 63 other grids at its place (a region spanning more
+    than ``STEP_MAX_SPAN_DEG`` of directions is never read as a step, as a
+    one-pixel shift is radial somewhere in it), so such a region is no evidence of a
+    paste over a lens correction: the detector names it as possible
+    processing, not as a paste. Only without an established warp (with one,
+    :func:`field_explained` judges every region).
+
+    Parameters
+    ----------
+    regions : sequence of Region
+        Foreign regions no other processing explains.
+    origins : sequence of tuple of int
+        Candidate origins ``(dx, dy)`` of the first compression's grid (as
+        for :func:`radial_warp`).
+    shape : tuple of int
+        Image shape ``(H, W)``.
+
+    Returns
+    -------
+    list of int
+        Indices into ``regions``.
+    """
+    centre = np.array([(shape[1] - 1) / 2.0, (shape[0] - 1) / 2.0])
+    out = []
+    for i, region in enumerate(regions):
+        dx, dy = grid_origin(region.grid)
+        steps = _one_pixel_steps(region.bbox, centre)
+        if any(((dx - ox) % 8, (dy - oy) % 8) in steps for ox, oy in origins):
+            out.append(i)
+    return out
 
 
 def radial_warp(regions: Sequence[Region], origins: Sequence[tuple[int, int]],

@@ -17,6 +17,7 @@ _STAGE_WORDS = {
     "missing": "main grid missing",
     "resampled": "first grid moved by a radial warp (processing)",
     "cropped": "first grid moved by a crop (processing)",
+    "radial step": "first grid moved one pixel along its radius (possible processing)",
 }
 
 
@@ -29,6 +30,7 @@ def _region_rows(regions: list[dict[str, Any]]) -> list[dict[str, Any]]:
         "css": "line-flagged" if r["meaningful"] else "",
         "verdict": ("explained by the radial warp" if r["stage"] == "resampled" else
                     "explained by the crop" if r["stage"] == "cropped" else
+                    "a lens correction's step, too few to establish the warp" if r["stage"] == "radial step" else
                     "meaningful" if r["meaningful"] else "not meaningful"),
     } for r in regions]
 

@@ -3,7 +3,7 @@
 import numpy as np
 
 from forensics_plugins.jpeg_grid.regions import Region
-from forensics_plugins.jpeg_grid.resampling import radial_warp
+from forensics_plugins.jpeg_grid.resampling import radial_steps, radial_warp
 from forensics_plugins.jpeg_grid.votes import grid_code
 
 SHAPE = (2000, 3000)
@@ -85,3 +85,14 @@ def test_an_established_warp_is_refitted_and_judged_pixel_by_pixel_and_a_paste_s
     refitted, explained = field_explained(warp, regions, labels)
     assert np.allclose(refitted.terms, (40.0, -15.0), atol=1.0)
     assert 0 not in explained and len(explained) == len(regions) - 1
+
+
+def test_a_lone_region_one_pixel_along_its_radius_is_a_radial_step_and_other_shifts_are_not():
+    # Below the centre one pixel inwards is (0, -1), i.e. the grid (0, 7); to the right outwards, (1, 0); on the
+    # diagonal, (1, 1). The same shifts across the radius, or of several pixels, are what a paste may have.
+    steps = [_region(0, 90, 0.5, -1.0), _region(1, 0, 0.4, 1.0), _region(2, 45, 0.6, 1.2)]
+    others = [_region(3, 90, 0.5, 0.0, origin=(1, 0)), _region(4, 0, 0.4, 0.0, origin=(3, 5)),
+              _region(5, 0, 0.4, 3.0)]
+    assert radial_steps(steps + others, [(0, 0)], SHAPE) == [0, 1, 2]
+    # Measured from another first grid the same regions are no step.
+    assert radial_steps(steps, [(4, 4)], SHAPE) == []
