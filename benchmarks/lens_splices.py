@@ -40,6 +40,21 @@ Then what the pasted lines actually do (issue 37, item 3):
   pasted lines' combined error) are counted, with how many of those hold
   two directions and were called (p < 0.01).
 
+Then whether the pasted lines, taken together, read another lens than the
+rest of the photo (the region against the rest, issue 37 item 3): each set
+of lines gets its random-effects mean ``k1`` (DerSimonian-Laird: each
+line's stated error plus the spread between lines that those errors do not
+explain, estimated from the lines themselves), and ``z`` is the difference
+of the two means over its combined error.
+
+* with the pasted piece known (its mask; for a control, the masks of its
+  host's splices): the share of cases with ``|z| > 3`` and the median
+  between-line spread inside and outside;
+* without it, as a test must: the largest ``|z|`` over the regions the
+  detector's region test would weigh (the informative lines within its
+  radius of a long line's midpoint, in two directions), its 90th and 95th
+  percentiles over the controls, and the share of each kind above them.
+
 ``--out`` saves every case's record (status, p-value, evidence, the region,
 informative lines, the global k1, which lines lie in the mask, the time
 ``analyse`` took). ``--module`` names another copy of the plugin, a package
@@ -77,6 +92,8 @@ KINDS = ("other_camera", "moved", "rescaled", "control")
 P_CALLED = 0.01
 #: A line counts as inside the mask when at least this share of its points are.
 IN_MASK_SHARE = 0.5
+#: |z| of the region against the rest counted as a clear difference.
+CLEAR_Z = 3.0
 
 
 def cases(suite: Path) -> list[dict[str, str]]:
@@ -133,8 +150,9 @@ def run_one(job: tuple[str, Path, dict[str, str]]) -> dict[str, Any]:
     Parameters
     ----------
     job : tuple
-        The plugin package's module name, the suite folder and the case's
-        ``truth.csv`` row.
+        The plugin package's module name, the suite folder, the case's
+        ``truth.csv`` row and the masks (relative to the suite) whose lines
+        are marked: its own, or for a control those of its host's splices.
 
     Returns
     -------
@@ -144,7 +162,7 @@ def run_one(job: tuple[str, Path, dict[str, str]]) -> dict[str, Any]:
     """
     from forensics_core.evidence import load_evidence
 
-    module, suite, row = job
+    module, suite, row, region_masks = job
     detector = importlib.import_module(f"{module}.detector")
     spec = importlib.import_module(f"{module}.spec")
     record: dict[str, Any] = {
@@ -176,8 +194,19 @@ def run_one(job: tuple[str, Path, dict[str, str]]) -> dict[str, Any]:
         "flagged_line_ids": details.get("flagged_line_ids") or [],
         "k1": model.get("k1"), "k1_stderr": model.get("k1_stderr"), "elapsed_s": elapsed,
     })
+    informative = [ln for ln in lines if ln.get("informative") and ln.get("k1") is not None
+                   and ln.get("k1_stderr") is not None and np.isfinite(ln["k1_stderr"])]
+    masks = [np.asarray(Image.open(suite / m).convert("L")) >= 128 for m in region_masks]
+    record["lines"] = []
+    for ln in informative:
+        (x0, y0), (x1, y1) = ln["endpoints_px"]
+        record["lines"].append({
+            "k1": ln["k1"], "k1_stderr": ln["k1_stderr"], "length_px": ln["length_px"],
+            "mid_px": [(x0 + x1) / 2.0, (y0 + y1) / 2.0], "direction": float(np.arctan2(y1 - y0, x1 - x0)),
+            "in_masks": [bool(lines_in_mask(lines, [ln["id"]], m)) for m in masks]})
+    record["shape"] = list(luma.shape[:2])
     if row["mask"]:
-        mask = np.asarray(Image.open(suite / row["mask"]).convert("L")) >= 128
+        mask = masks[0]
         record["departures"] = [
             {"z": ln["z"], "delta_k1": ln["delta_k1"], "delta_k1_stderr": ln["delta_k1_stderr"],
              "in_mask": bool(lines_in_mask(lines, [ln["id"]], mask))}
@@ -300,6 +329,96 @@ def print_pasted_lines(records: list[dict[str, Any]], recipes: dict[str, dict[st
               f"  measurable {len(measurable)}, of them in two directions {len(both)}, called {len(called)}")
 
 
+def random_effects_mean(k1: np.ndarray, stderr: np.ndarray) -> tuple[float, float, float]:
+    """DerSimonian-Laird random-effects mean of lines' ``k1``: the mean, its standard error and the spread.
+
+    Parameters
+    ----------
+    k1, stderr : ndarray, shape (n,), n >= 2
+        Each line's ``k1`` and its stated standard error.
+
+    Returns
+    -------
+    tuple of float
+        The mean, its standard error, and ``tau``, the between-line standard
+        deviation the stated errors do not explain (moment estimate).
+
+    References
+    ----------
+    .. [1] R. DerSimonian, N. Laird, Meta-analysis in clinical trials,
+       Controlled Clinical Trials 7(3), 1986.
+    """
+    w = stderr**-2.0
+    mean = np.sum(w * k1) / w.sum()
+    q = np.sum(w * (k1 - mean) ** 2)
+    tau2 = max(0.0, (q - (k1.size - 1)) / (w.sum() - np.sum(w**2) / w.sum()))
+    w = 1.0 / (stderr**2 + tau2)
+    return float(np.sum(w * k1) / w.sum()), float(w.sum() ** -0.5), float(np.sqrt(tau2))
+
+
+def _against_rest(lines: list[dict[str, Any]], inside: np.ndarray) -> tuple[float, float, float] | None:
+    """``z`` of the lines ``inside`` against the others, and each side's spread; None with under 2 a side."""
+    if inside.sum() < 2 or (~inside).sum() < 2:
+        return None
+    k = np.array([ln["k1"] for ln in lines])
+    s = np.array([ln["k1_stderr"] for ln in lines])
+    a, b = random_effects_mean(k[inside], s[inside]), random_effects_mean(k[~inside], s[~inside])
+    return (a[0] - b[0]) / np.hypot(a[1], b[1]), a[2], b[2]
+
+
+def best_region_z(record: dict[str, Any]) -> float | None:
+    """The largest ``|z|`` of a region against the rest over the regions the region test weighs."""
+    from forensics_plugins.lens_distortion.regions import FAMILY_DEG, REGION_MIN_LENGTH, REGION_RADIUS
+
+    lines = record.get("lines") or []
+    if len(lines) < 4:
+        return None
+    h, w = record["shape"]
+    scale = max(h, w) / 2.0
+    mid = np.array([ln["mid_px"] for ln in lines]) / scale
+    direction = np.array([ln["direction"] for ln in lines])
+    long_enough = np.array([ln["length_px"] for ln in lines]) >= REGION_MIN_LENGTH * min(h, w)
+    best = None
+    for seed in np.flatnonzero(long_enough):
+        inside = long_enough & (np.hypot(*(mid - mid[seed]).T) <= REGION_RADIUS)
+        turn = np.abs((direction[inside] - direction[seed] + np.pi / 2) % np.pi - np.pi / 2)
+        if not (np.any(turn < np.radians(FAMILY_DEG)) and np.any(turn >= np.radians(FAMILY_DEG))):
+            continue
+        found = _against_rest(lines, inside)
+        if found is not None and (best is None or abs(found[0]) > best):
+            best = abs(found[0])
+    return best
+
+
+def print_region_against_rest(records: list[dict[str, Any]]) -> None:
+    """Print whether pasted lines read another lens than the rest of the photo (module docstring).
+
+    Parameters
+    ----------
+    records : list of dict
+        Records of :func:`run_one`.
+    """
+    ok = [r for r in records if r["status"] == "ok" and r.get("lines")]
+    print(f"\nthe region against the rest (random-effects mean k1 of each side; |z| > {CLEAR_Z:g} counted)")
+    for kind in KINDS:
+        found = [x for r in ok if r["kind"] == kind
+                 for i in range(len(r["lines"][0]["in_masks"]))
+                 if (x := _against_rest(r["lines"], np.array([ln["in_masks"][i] for ln in r["lines"]])))]
+        if found:
+            z = np.abs([x[0] for x in found])
+            print(f"  piece known   {kind:13s} {len(z):3d} pieces  |z| > {CLEAR_Z:g}: {np.mean(z > CLEAR_Z):4.0%}  "
+                  f"spread of lines' k1, median: inside {np.median([x[1] for x in found]):.3f}, outside "
+                  f"{np.median([x[2] for x in found]):.3f}")
+    best = {kind: [z for r in ok if r["kind"] == kind if (z := best_region_z(r)) is not None] for kind in KINDS}
+    if len(best["control"]) < 10:
+        return
+    for q in (0.90, 0.95):
+        threshold = float(np.quantile(best["control"], q))
+        shares = ", ".join(f"{kind} {np.mean(np.array(v) > threshold):.0%} of {len(v)}" for kind, v in best.items()
+                           if v)
+        print(f"  piece unknown best region |z| above the controls' {q:.0%} point ({threshold:.1f}): {shares}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--suite", type=Path, default=DEFAULT_SUITE)
@@ -316,9 +435,15 @@ def main() -> None:
     spec = importlib.import_module(f"{args.module}.spec")
     importlib.import_module(f"{args.module}.detector")
     rows = cases(args.suite)
+    host_masks: dict[str, list[str]] = {}
+    for row in rows:
+        if row["mask"]:
+            host_masks.setdefault(row.get("host", ""), []).append(row["mask"])
+    jobs = [(args.module, args.suite, row, [row["mask"]] if row["mask"] else host_masks.get(row.get("host", ""), []))
+            for row in rows]
     t0 = time.perf_counter()
     with ProcessPoolExecutor(args.workers) as pool:
-        records = list(pool.map(run_one, [(args.module, args.suite, row) for row in rows]))
+        records = list(pool.map(run_one, jobs))
     wall = time.perf_counter() - t0
     print(f"{args.module} ({spec.__file__}), version {getattr(spec, 'VERSION', '?')}: {len(records)} cases "
           f"from {args.suite} in {wall:.0f} s on {args.workers} workers")
@@ -327,6 +452,7 @@ def main() -> None:
     if recipes_file.exists():
         recipes = {c["file"]: c for c in json.loads(recipes_file.read_text())["cases"]}
         print_pasted_lines(records, recipes)
+    print_region_against_rest(records)
     if args.out is not None:
         args.out.write_text(json.dumps({"suite": str(args.suite), "module": args.module,
                                         "module_file": spec.__file__, "version": getattr(spec, "VERSION", None),

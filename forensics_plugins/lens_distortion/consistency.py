@@ -168,7 +168,7 @@ class PaperRules:
 
 @dataclass(frozen=True)
 class OneTermModel:
-    """The paper's one-term lens, ``k2 = 0``, with the centre of distortion free: the photo's ``k1``.
+    """The paper's one-term lens, ``k2 = 0``, with the centre of distortion fitted: the photo's ``k1``.
 
     Fitted to the same lines, with the same robust weights, as
     :class:`GlobalModel`. Real lenses need more than one term (``k2``; the
@@ -961,7 +961,8 @@ def _decide(
     )
     departures = _line_departures(paper_fits, fits, ids, dep, line_z, line_p, line_flag)
     test = (
-        f"One camera model (k1, k2 and centre of distortion free, each line its own straight line) fitted "
+        f"One camera model (k1, k2 and centre of distortion fitted, the centre held near the image centre, each "
+        f"line its own straight line) fitted "
         f"robustly to {ids.size} informative lines; each line's own k1 (global k2 and centre fixed) compared "
         f"with the model's, its error including the photo's own edge noise and the measured non-straightness "
         f"of real edges (Student t, {dof:g} degrees of freedom). Criterion: a compact region whose long lines "

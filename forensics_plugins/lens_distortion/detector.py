@@ -91,7 +91,7 @@ def _line_records(lines: list[DistortedLine], shape: tuple[int, int], result: Co
 
 
 def _global_model(result: ConsistencyResult) -> dict[str, Any] | None:
-    """The photo's lens as published to other detectors: the one-term ``k1`` with the centre free."""
+    """The photo's lens as published to other detectors: the one-term ``k1`` with the centre fitted."""
     m = result.model
     if m is None:
         return None
