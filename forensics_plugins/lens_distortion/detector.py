@@ -351,7 +351,7 @@ class LensDistortion(Detector):
     >>> from forensics_plugins.lens_distortion.spec import DEFAULT_PARAMS
     >>> result = LensDistortion().analyze(load_evidence("tests/data/calibration/left01.jpg"), DEFAULT_PARAMS)
     >>> result.status.value, result.p_value, result.headline
-    ('ok', 1.0, 'All 33 informative lines fit one lens model, k1 = 0.126 ± 0.011; no line or region departs (p = 1).')
+    ('ok', 1.0, 'All 33 informative lines fit one lens model, k1 = 0.126 ± 0.013; no line or region departs (p = 1).')
     """
 
     spec = SPEC
