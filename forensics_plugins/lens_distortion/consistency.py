@@ -679,27 +679,6 @@ def _one_term(lines: _Lines, beta: np.ndarray, row_weight: np.ndarray, cluster: 
     )
 
 
-def _robust_fit(lines: _Lines, start: np.ndarray, noise: np.ndarray, model_var: np.ndarray, shrink: np.ndarray,
-                prior_sd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Iteratively reweighted fit of ``(k1, k2, cx, cy)``: the parameters, their covariance (4, 4), each line's
-    robust weight (m,) and each point's row weight (N,).
-
-    Soft (Cauchy) weights first, then Tukey's biweight; the first rounds pin
-    every parameter that has a prior (:data:`_PINNED_ROUNDS`).
-    """
-    pinned = np.where(np.isfinite(prior_sd), np.minimum(prior_sd, _PINNED_SD), np.inf)
-    beta = start
-    weight = np.ones(noise.size)
-    for round_ in range(_MAX_ROUNDS):
-        row_weight = (np.sqrt(weight * shrink) / noise)[lines.ids]
-        beta, cov = _fit_global(lines, beta, row_weight, pinned if round_ < _PINNED_ROUNDS else prior_sd)
-        new_weight = _robust_weight(_departures(lines, beta, cov, noise, model_var).z, round_)
-        if round_ >= _CAUCHY_ROUNDS and np.allclose(new_weight, weight, atol=1e-3):
-            break
-        weight = new_weight
-    return beta, cov, weight, row_weight
-
-
 def _robust_weight(z: np.ndarray, round_: int) -> np.ndarray:
     if round_ < _CAUCHY_ROUNDS:
         return 1.0 / (1.0 + (z / _CAUCHY_C) ** 2)
@@ -916,8 +895,16 @@ def _decide(
     for c, group in enumerate(structures(midpoints, directions, np.arange(informative.size))):
         cluster[group] = c
     shrink = noise_var / (noise_var + model_var)
-    start = np.array([k1_start, 0.0, 0.0, 0.0])
-    beta, cov, weight, row_weight = _robust_fit(lines, start, noise, model_var, shrink, prior_sd)
+    pinned = np.where(np.isfinite(prior_sd), _PINNED_SD, np.inf)
+    beta = np.array([k1_start, 0.0, 0.0, 0.0])
+    weight = np.ones(informative.size)
+    for round_ in range(_MAX_ROUNDS):
+        row_weight = (np.sqrt(weight * shrink) / noise)[lines.ids]
+        beta, cov = _fit_global(lines, beta, row_weight, pinned if round_ < _PINNED_ROUNDS else prior_sd)
+        new_weight = _robust_weight(_departures(lines, beta, cov, noise, model_var).z, round_)
+        if round_ >= _CAUCHY_ROUNDS and np.allclose(new_weight, weight, atol=1e-3):
+            break
+        weight = new_weight
     robust_cov = _structure_jackknife(lines, beta, cov, row_weight, cluster)
     one_term = _one_term(lines, beta, row_weight, cluster, prior_sd, scale,
                          _families(directions, weight / (noise_var + model_var)), tau_photo)
