@@ -3,7 +3,13 @@
 Public API for users and plugin authors. Plugins import from here only.
 """
 
+import warnings
 from importlib.metadata import PackageNotFoundError, version
+
+# pyHanko imports cryptography's DSA key type at module level, and cryptography 51 warns on that import: a line on
+# stderr for every signed report or verification, which breaks "one line per bad input" and says nothing about this
+# run (forensics never makes or accepts DSA keys: signing.py refuses them). Only that warning, only from pyHanko.
+warnings.filterwarnings("ignore", message=r"DSA is deprecated", module=r"pyhanko(\.|$)")
 
 from .detector import Deferred, Detector
 from .contracts import (
