@@ -30,11 +30,12 @@ from forensics_core import (
 from . import naming
 from .bayer import shifted
 from .content_null import null_rates
-from .regions import KINDS, Question, Region, count_tests, detectable_side, scan
+from .drift import RULE as DRIFT_RULE, check_region
+from .regions import KINDS, Question, Region, Scan, count_tests, detectable_side, scan
 from .residuals import block_features
 from .significance import clopper_pearson, log10_binom_tail
 from .spec import JPEG_GRID, SPEC
-from .votes import SHIFTS, phase_votes
+from .votes import SHIFTS, PhaseVotes, phase_votes
 from .warp import mosaic_warp
 
 if TYPE_CHECKING:
@@ -125,6 +126,28 @@ def regions_mask(details: Mapping[str, Any], shape: tuple[int, int]) -> np.ndarr
         for row, col in region["blocks"]:
             mask[row * block:(row + 1) * block, col * block:(col + 1) * block] = True
     return mask
+
+
+def _drifted(votes: PhaseVotes, questions: list[Question], chroma: np.ndarray, plain: Scan, block: int,
+             shape: tuple[int, int], eps: float) -> tuple[list[dict[str, Any] | None], list[Question], Scan]:
+    """The regions a smooth drift of the whole mosaic explains, and the scan without them (:mod:`.drift`).
+
+    Each region of ``plain`` is checked against the drift of the voting
+    blocks outside it; the blocks of the regions explained abstain from
+    ``questions`` and the scan is run again.
+    Returns every region's check (its record, None where too few blocks
+    vote), and the questions and scan to go on with: ``plain``'s own when
+    no region is explained.
+    """
+    checks = [check_region(votes.shift_vote, votes.usable, r.blocks, block, shape) for r in plain.regions]
+    explained = [r for r, c in zip(plain.regions, checks) if c is not None and c.explained]
+    records = [None if c is None else c.record() for c in checks]
+    if not explained:
+        return records, questions, plain
+    away = ~np.any([r.blocks for r in explained], axis=0)
+    kept = [Question(q.kind, q.disagree, q.voting & away, null_rates(q.disagree, q.voting & away, chroma))
+            for q in questions]
+    return records, kept, scan(kept, eps)
 
 
 def analyse(pixels: np.ndarray, params: Mapping[str, Any], warp: RadialResampling | None = None) -> DetectorResult:
@@ -234,6 +257,18 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any], warp: RadialResamplin
         questions.append(Question(kind, disagree, voting, null))
     details["colour_against_share"] = share
     result = scan(questions, eps)
+    explained: list[tuple[Region, dict[str, Any]]] = []
+    if result.regions and not follows:
+        plain = result
+        checks, questions, result = _drifted(votes, questions, chroma, plain, block, (h, w), eps)
+        details["drift_checks"] = {"rule": DRIFT_RULE, "regions": checks}
+        explained = [(r, c) for r, c in zip(plain.regions, checks) if c is not None and c["explained"]]
+        if explained:
+            span = max(c["span_px"] for _, c in explained)
+            details[PROCESSING_KEY] = Processing(
+                "slight resampling", f"resampled slightly as a whole after demosaicing: its colour mosaic drifts "
+                f"smoothly by up to {span:.1f} px across the frame, as when a camera scales its sensor's image to the "
+                "output size or an editor slightly resizes, rotates or shears the photo").to_details()
     timer.lap("scan")
     vote_rate = diag["votes"] / (ny * nx)
     details["power"] = {
@@ -241,6 +276,9 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any], warp: RadialResamplin
         "red_blue": _power((ny, nx), rb["rate"], rb["votes"] / (ny * nx), n_tests, eps),
     }
     regions = [_region_record(r, block, (h, w), i + 1) for i, r in enumerate(result.regions)]
+    if explained:
+        details["regions_explained"] = [{**{k: v for k, v in _region_record(r, block, (h, w), i + 1).items()
+                                            if k != "blocks"}, "drift": c} for i, (r, c) in enumerate(explained)]
     if name["pattern"]:
         for rec, r in zip(regions, result.regions):
             sv = votes.shift_vote[r.blocks]
@@ -293,11 +331,25 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any], warp: RadialResamplin
     )
 
 
+def _lens_corrected(details: Mapping[str, Any]) -> bool:
+    """Whether each block was judged against the phase jpeg_grid's lens correction gave it."""
+    return "mosaic" in details.get(PROCESSING_KEY, {})
+
+
 def _processing_text(details: dict[str, Any]) -> str:
     """The processing the mosaic shows, as a sentence for the summary (empty when none)."""
     processing = details.get(PROCESSING_KEY)
     if not processing:
         return ""
+    explained = details.get("regions_explained")
+    if explained:
+        span = max(r["drift"]["span_px"] for r in explained)
+        gain = min(r["drift"]["outside_gain_nats"] for r in explained)
+        return (f" {len(explained)} area(s) voting for another phase follow a smooth drift of the whole mosaic, by up "
+                f"to {span:.1f} px across the frame: a displacement varying linearly across the photo explains the "
+                f"votes around them better than one phase (by {gain:.0f} nats or more) and predicts those areas' "
+                "phase. The photo was resampled slightly as a whole, which is processing; those areas were set aside "
+                "and the photo scanned again without them.")
     m = processing["mosaic"]
     p = f"{10 ** m['log10_p']:.1g}" if m["log10_p"] > -300 else f"10^{m['log10_p']:.0f}"
     return (f" The mosaic follows the lens correction that jpeg_grid found, moved by its displacement rounded to "
@@ -312,7 +364,10 @@ def _nfa_text(log10_nfa: float) -> str:
 
 def _headline(details: dict[str, Any], regions: list[dict[str, Any]], nfa: float) -> str:
     """The finding in one sentence for page 1: where a region departs, or the phase held throughout."""
-    if not regions and PROCESSING_KEY in details:
+    if not regions and details.get("regions_explained"):
+        return (f"The mosaic drifts smoothly across the frame (slight resampling of the whole photo, processing), "
+                f"which explains the areas of other phases; no other region departs (smallest NFA {nfa:.2g}).")
+    if not regions and _lens_corrected(details):
         return (f"The mosaic follows a lens correction's warp (processing); no region departs from the phase it gave "
                 f"each block (smallest NFA {nfa:.2g}).")
     if not regions:
@@ -330,9 +385,12 @@ def _summary(details: dict[str, Any], regions: list[dict[str, Any]], nfa: float)
     where = f"a {pattern} Bayer mosaic" if pattern else "a Bayer mosaic (pattern name undetermined)"
     rate = details["diagonal"]["rate"]
     processing = _processing_text(details)
-    if not regions and processing:
+    if not regions and _lens_corrected(details):
         return (f"The photo carries the trace of {where}; no region departs from the phase its lens correction gave "
                 f"each block (smallest NFA {nfa:.2g}).{processing}")
+    if not regions and processing:
+        return (f"The photo carries the trace of {where}; no region departs from its phase but those the drift of "
+                f"its mosaic explains (smallest NFA {nfa:.2g}).{processing}")
     if not regions:
         frac = details["power"]["diagonal"]["fraction"]
         return (f"The photo carries the trace of {where} in one phase throughout (blocks agree at a rate of "
@@ -341,7 +399,8 @@ def _summary(details: dict[str, Any], regions: list[dict[str, Any]], nfa: float)
     r = regions[0]
     kind = "green on the other diagonal" if r["kind"] == "diagonal" else "red and blue swapped"
     more = f" and {len(regions) - 1} more" if len(regions) > 1 else ""
-    against = "the phase the photo's lens correction gave it" if processing else "the photo's demosaicing phase"
+    against = ("the phase the photo's lens correction gave it" if _lens_corrected(details)
+               else "the photo's demosaicing phase")
     return (f"Region 1{more} ({100 * r['area_fraction']:.1f}% of the photo, {kind}) disagrees with {against} "
             f"({where}), NFA = {_nfa_text(r['log10_nfa'])}.{processing}")
 

@@ -58,6 +58,7 @@ def regions_table(details: dict[str, Any]) -> Table | None:
     """
     listed = [("flagged", r) for r in details.get("regions", [])]
     listed += [("set aside", r) for r in details.get("regions_set_aside", [])]
+    listed += [("explained by the mosaic's drift", r) for r in details.get("regions_explained", [])]
     if not listed:
         return None
     rows = [[r["id"], status, _KIND_WORDS.get(r["kind"], r["kind"]), r["area_fraction"], r.get("n_blocks"),
@@ -76,7 +77,7 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
     thresholds = d.get("thresholds", {})
     pattern = d.get("pattern") or {}
     # After a lens correction each block is judged against the phase the correction gave it.
-    phase = ("the phase the lens correction gave each block" if PROCESSING_KEY in d
+    phase = ("the phase the lens correction gave each block" if "mosaic" in d.get(PROCESSING_KEY, {})
              else "the photo's demosaicing phase")
     if finding.status is not Status.OK:
         decision = "no decision: the photo does not carry enough of the trace"
@@ -111,6 +112,7 @@ def report_section(finding: DetectorFinding, evidence: Evidence) -> ReportSectio
         "regions": _region_rows(regions)[:SHOWN_REGIONS],
         "n_regions": len(regions),
         "n_set_aside": len(d.get("regions_set_aside", [])),
+        "n_explained": len(d.get("regions_explained", [])),
         "references": list(REFERENCES),
     }
     figures = {}
