@@ -365,8 +365,8 @@ def _nfa_text(log10_nfa: float) -> str:
 def _headline(details: dict[str, Any], regions: list[dict[str, Any]], nfa: float) -> str:
     """The finding in one sentence for page 1: where a region departs, or the phase held throughout."""
     if not regions and details.get("regions_explained"):
-        return (f"The mosaic drifts smoothly across the frame (slight resampling of the whole photo, processing), "
-                f"which explains the areas of other phases; no other region departs (smallest NFA {nfa:.2g}).")
+        return (f"The mosaic drifts smoothly across the frame, a slight resampling of the whole photo (processing); no "
+                f"other region departs (smallest NFA {nfa:.2g}).")
     if not regions and _lens_corrected(details):
         return (f"The mosaic follows a lens correction's warp (processing); no region departs from the phase it gave "
                 f"each block (smallest NFA {nfa:.2g}).")

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from forensics_core import PROCESSING_KEY, Status
+from forensics_core import HEADLINE_WORDS, PROCESSING_KEY, Status
 from forensics_plugins.cfa import synth
 from forensics_plugins.cfa.detector import analyse
 from forensics_plugins.cfa.drift import AffineDrift, DriftCheck, DriftFit, fit_drift
@@ -59,6 +59,7 @@ def test_the_bands_of_a_drifted_mosaic_are_explained_as_processing(photos):
     assert len(d["regions_explained"]) == 2 and all(r["drift"]["explained"] for r in d["regions_explained"])
     assert d[PROCESSING_KEY]["kind"] == "slight resampling"
     assert "processing" in result.headline and "drift" in result.summary
+    assert len(result.headline.split()) <= HEADLINE_WORDS
 
 
 def test_a_piece_pasted_into_the_drifted_photo_is_still_found(photos):
