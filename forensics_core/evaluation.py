@@ -38,6 +38,12 @@ def _relevance(calibration: CalibrationSet, info: EvidenceInfo) -> str:
     mp = info.width * info.height / 1e6
     what = (f"The calibration data are {data.get('n_hp', 0)} manipulated and {data.get('n_hd', 0)} authentic photos "
             f"({sets}).")
+    made = [r for r in data.get("records", []) if r.get("seed") is not None]
+    if made:
+        what += " Of them, " + "; ".join(
+            f"{r.get('n_spliced', 0)} manipulated and {r.get('n_authentic', 0)} authentic were made by the tool's "
+            f"{r.get('name', '?')} generator (seed {r['seed']}) from authentic photos of the real corpus"
+            for r in made) + "."
     formats, span = data.get("formats"), data.get("megapixels")
     if not formats or not span:
         return what + " Their formats and sizes are not recorded, so how far they resemble this photo is not known."
@@ -84,13 +90,17 @@ def evaluate(findings: Sequence[DetectorFinding], verdict: Verdict, info: Eviden
         fused += sum(own.values())
     verdict.log10_lr = None if fused is None else round(fused, 4)
     data = calibration.data
+    fused_names = set(calibration.fusion.weights) if calibration.fusion else set()
     verdict.likelihood_ratio = LikelihoodRatio(
         hp=calibration.propositions.get("hp", HP),
         hd=calibration.propositions.get("hd", HD),
         log10_lr=verdict.log10_lr,
         verbal=verbal(fused) if fused is not None else "not evaluated: no fusion of calibrated detectors",
-        contributed=sorted(n for n, v in llrs.items() if v is not None and abs(v) > 1e-9),
+        contributed=sorted(n for n, v in llrs.items()
+                           if v is not None and abs(v) > 1e-9 and (n in own or n in fused_names)),
         uncalibrated=sorted(f.name for f in findings if llrs[f.name] is None and f.status is Status.OK),
+        experimental=sorted(f.name for f in findings if f.status is Status.OK and llrs[f.name] is not None
+                            and f.name not in own and f.name not in fused_names),
         calibration={
             "records": [{k: r.get(k) for k in ("name", "content_sha256", "n_cases")} for r in data.get("records", [])],
             "n_hp": data.get("n_hp"), "n_hd": data.get("n_hd"),
@@ -98,6 +108,10 @@ def evaluate(findings: Sequence[DetectorFinding], verdict: Verdict, info: Eviden
             "cllr_fused": calibration.fusion.cllr if calibration.fusion else None,
             "cllr_min_fused": calibration.fusion.cllr_min if calibration.fusion else None,
             "elub_fused": [calibration.fusion.lower, calibration.fusion.upper] if calibration.fusion else None,
+            "cllr_fused_by_record": {part.removeprefix("record "): entry["fused"]["cllr"]
+                                     for part, entry in data.get("costs", {}).items() if part.startswith("record ")},
+            "experimental": data.get("experimental", {}),
+            "min_fusion_auc": data.get("min_fusion_auc"),
             "tool": dict(calibration.tool),
             **({"own_calibration": {f.name: f.details.get("calibration") for f in findings if f.name in own}}
                if own else {}),

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
-SCHEMA_VERSION = "1.6"
+SCHEMA_VERSION = "1.7"
 
 
 class Status(str, enum.Enum):
@@ -241,8 +241,10 @@ class LikelihoodRatio:
     ``log10_lr`` is the fused log10 likelihood ratio from calibrators fitted
     on validation data (:mod:`forensics_core.calibration`), None when no
     calibrator applies. ``contributed`` names the detectors whose own LR is
-    not 1; ``uncalibrated`` those that ran without a calibrator (shown, kept
-    out of the LR). ``calibration`` identifies the calibrators and their data;
+    not 1 and enter the fusion; ``uncalibrated`` those that ran without a
+    calibrator (shown, kept out of the LR); ``experimental`` those with a
+    calibrator that the fusion leaves out because they carried no
+    information on real photos (their own LR shown, not fused). ``calibration`` identifies the calibrators and their data;
     ``relevance`` says in one sentence how far that data resembles this photo.
     """
 
@@ -254,6 +256,7 @@ class LikelihoodRatio:
     uncalibrated: list[str] = field(default_factory=list)
     calibration: dict[str, Any] = field(default_factory=dict)
     relevance: str = ""
+    experimental: list[str] = field(default_factory=list)
 
 
 @dataclass

@@ -54,7 +54,20 @@ def calibrate_command(ctx, records, out_file, detectors):
         weights = ", ".join(f"{k} {v:+.2f}" for k, v in f.weights.items())
         table.add_row("fused", "", "", f"{f.intercept:+.3f}; {weights}", f"{f.lower:+.2f} .. {f.upper:+.2f}",
                       f"{f.cllr:.3f}", f"{f.cllr_min:.3f}")
-    Console(highlight=False, emoji=False, width=160).print(table)
+    out = Console(highlight=False, emoji=False, width=160)
+    out.print(table)
+    parts = Table(title="cross-validated Cllr / Cllr_min per record and per set")
+    for col in ("", "Hp / Hd", "fused", *result.data["fused"]):
+        parts.add_column(col)
+    for part, entry in result.data["costs"].items():
+        parts.add_row(part, f"{entry['fused']['n_hp']} / {entry['fused']['n_hd']}",
+                      *(f"{entry[n]['cllr']:.3f} / {entry[n]['cllr_min']:.3f}" for n in ("fused", *result.data["fused"])))
+    out.print(parts)
+    experimental = result.data["experimental"]
+    if experimental:
+        console.print(f"experimental, left out of the fusion (best AUC on a set of found photos below "
+                      f"{result.data['min_fusion_auc']:g}): "
+                      + ", ".join(f"{d} {auc:.2f}" for d, auc in experimental.items()))
     scored = sorted(c.detector for c in result.calibrators.values() if c.feature == "score")
     console.print(f"x = -log10 p (capped){'; x = score for ' + ', '.join(scored) if scored else ''}; "
                   f"calibration file: {out_file}")

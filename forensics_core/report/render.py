@@ -376,10 +376,21 @@ def _lr_summary(verdict, detectors) -> dict[str, Any] | None:
         "band": f"between 1/{WEAK_SUPPORT_LR:g} and {WEAK_SUPPORT_LR:g}",
         "threshold": f"{WEAK_SUPPORT_LR:g}",
         "uncalibrated": ", ".join(lr.uncalibrated),
+        "experimental": ", ".join(lr.experimental),
+        "min_auc": f"{cal.get('min_fusion_auc', 0.6):g}",
         "relevance": lr.relevance,
         "performance": (f"Cross-validated on that data ({cal.get('cross_validation')}), the fused LR's cost Cllr is "
-                        f"{cllr:.2f} (0 for perfect evidence, 1 for none)." if cllr is not None else ""),
+                        f"{cllr:.2f} (0 for perfect evidence, 1 for none){_by_record(cal)}." if cllr is not None
+                        else ""),
     }
+
+
+def _by_record(cal: dict[str, Any]) -> str:
+    """The fused Cllr per calibration record, when there are several (found photos and generated ones differ)."""
+    parts = cal.get("cllr_fused_by_record") or {}
+    if len(parts) < 2:
+        return ""
+    return ": " + ", ".join(f"{v:.2f} on the {k} record" for k, v in parts.items() if v is not None)
 
 
 def _error_rates(findings: Findings, options: ReportOptions) -> ErrorRates:

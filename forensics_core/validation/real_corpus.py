@@ -50,6 +50,12 @@ class RealPhoto:
     def name(self) -> str:
         return f"{self.set}/{self.file}"
 
+    @property
+    def scene(self) -> str:
+        """The scene this photo is in the record of ``forensics validate`` on the corpus (its set and stem), so that
+        cases made from it are grouped with it when calibrators are cross-validated (:func:`..calibration.fit.scene`)."""
+        return f"authentic_buildings/{self.set}:{Path(self.file).stem}"
+
     def describe(self) -> dict[str, object]:
         return {"set": self.set, "file": self.file, "sha256": self.sha256, "camera": self.camera,
                 "size": list(self.size)}

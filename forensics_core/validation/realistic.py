@@ -31,8 +31,10 @@ weighs half or more. Each case is then saved as forgers and platforms save:
 JPEG at quality 70-100 (4:4:4 or 4:2:0), or downscaled by 0.5-0.9 (Lanczos)
 and saved at 75-95, or as PNG. Controls are drawn from the same hosts and
 exports, so that a detector is measured on the forgery and not on the save.
-``truth.csv`` names each case's ``host`` photo: cross-validation grouped by
-it keeps a host's forgeries and control on one side.
+``truth.csv`` names each case's ``host`` photo and its ``scene``, the key
+the host has in the corpus's own validation record: cross-validation grouped
+by scene keeps a host's forgeries, its control and the host itself on one
+side when the calibrators are fitted on both records.
 
 What these cases cannot stand for: they are made by a program, not by a
 person choosing what to hide and working until it looks right. The regions
@@ -45,7 +47,7 @@ bound on nothing: real forgeries may be easier (careless) or harder
 
 The suite folder holds the photos, ``masks/*.png``, ``truth.csv`` (read by
 :mod:`.cases`; conditions ``kind``, ``export``, ``jpeg_quality``,
-``feather_px``, ``host``, ``donor``) and ``recipes.json``: every case's
+``feather_px``, ``host``, ``donor``, ``scene``) and ``recipes.json``: every case's
 source photos with their SHA-256, its region, transform and export, and its
 own seed. The same corpus and seed give the same files.
 """
@@ -66,7 +68,7 @@ REALISTIC = "realistic"
 SPLICE, COPY_MOVE, REMOVAL, CONTROL = "splice", "copy_move", "removal", "control"
 KINDS = (SPLICE, COPY_MOVE, REMOVAL)
 _SKIPPED_SETS = frozenset({"opensfm_lund"})
-_HEADER = ("file", "label", "mask", "kind", "export", "jpeg_quality", "feather_px", "host", "donor")
+_HEADER = ("file", "label", "mask", "kind", "export", "jpeg_quality", "feather_px", "host", "donor", "scene")
 
 _AREA_SHARE = {SPLICE: (0.015, 0.08), COPY_MOVE: (0.015, 0.08), REMOVAL: (0.003, 0.015)}
 _HARMONICS = 4
@@ -86,9 +88,14 @@ _EXPORT_WEIGHTS = (0.6, 0.25, 0.15)
 
 @dataclass(frozen=True)
 class SuiteSize:
-    """How many forgeries of each kind; as many controls as forgeries in all."""
+    """How many forgeries of each kind; as many controls as forgeries in all.
 
-    per_kind: int = 12
+    The default, 60 (360 photos), is the shipped record's size, on which
+    the calibrators are fitted beside the real sets; it validates in about
+    90 min on 2 cores.
+    """
+
+    per_kind: int = 60
 
 
 @dataclass(frozen=True)
@@ -343,6 +350,6 @@ def _make(plan: Plan, folder: Path) -> tuple[dict[str, object], dict[str, str]]:
         "file": photo, "label": recipe["label"], "mask": mask_file or "", "kind": plan.kind, "export": export.kind,
         "jpeg_quality": "" if export.quality is None else str(export.quality),
         "feather_px": "" if mask is None else f"{feather:g}", "host": plan.host.name,
-        "donor": "" if plan.donor is None else plan.donor.name,
+        "donor": "" if plan.donor is None else plan.donor.name, "scene": plan.host.scene,
     }
     return recipe, row

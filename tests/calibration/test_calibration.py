@@ -365,3 +365,33 @@ def test_a_detector_of_one_kind_of_manipulation_is_calibrated_one_sided():
     assert inputs["dq"] == CalibratorInput("score") and "jpeg_grid" not in inputs
     shipped = load_shipped().calibrators["copy_move"]
     assert shipped.lower == 0.0 and shipped.log10_lr(None, 0.0) == 0.0 and shipped.floor > 0.0
+
+
+def _with_set_aucs(path, aucs, seed=None):
+    """The record at ``path`` with per-set AUCs in its methods (as `forensics validate` writes) and a seed."""
+    record = json.loads(path.read_text())
+    record["dataset"]["seed"] = seed
+    record["methods"] = [{"name": n, "by_condition": [{"key": "set", "value": "made", "auc": a}]}
+                         for n, a in aucs.items()]
+    path.write_text(json.dumps(record))
+    return path
+
+
+def test_only_detectors_informative_on_found_photos_are_fused(tmp_path):
+    """A generated record teaches calibrators but earns no detector a weight that found photos do not give."""
+    found = _with_set_aucs(_record(tmp_path, name="found.json"), {"strong": 0.9, "noise": 0.52, "shy": 0.5})
+    made = _with_set_aucs(_record(tmp_path, seed=1, name="made.json"), {"strong": 0.95, "noise": 0.99}, seed=7)
+    result = calibrate([found, made])
+    assert result.data["fused"] == ["strong"]
+    assert set(result.fusion.weights) == {"strong"}
+    assert result.data["experimental"] == {"noise": 0.52, "shy": 0.5}
+    assert result.data["records"][1]["seed"] == 7
+    assert set(result.data["costs"]) == {"record made", "set made"}
+    assert result.data["costs"]["set made"]["fused"]["n_hp"] == 40
+    # Every detector still gets its calibrator, shown with its own LR in a report.
+    assert set(result.calibrators) == {"strong", "noise", "shy"}
+
+
+def test_without_found_aucs_every_detector_is_fused(tmp_path):
+    made = _with_set_aucs(_record(tmp_path), {"strong": 0.95, "noise": 0.5}, seed=3)
+    assert calibrate([made]).data["experimental"] == {}

@@ -8,7 +8,9 @@ from PIL import Image
 from test_lens_splices import (build_reading_only, draw_corpus, pixels, says_the_corpus_is_absent,
                                seed_decides_the_files, truth_rows)
 
+from forensics_core.calibration.fit import scene
 from forensics_core.validation import folder_suite
+from forensics_core.validation.cases import find_sets
 from forensics_core.validation.realistic import CONTROL, KINDS, SuiteSize, build_realistic
 
 SIZE = SuiteSize(per_kind=3)
@@ -86,3 +88,18 @@ def test_a_forgery_and_its_control_are_saved_alike(built):
             assert forgery["host"] == r["host"]
             assert {k: v for k, v in forgery["export"].items() if k != "size"} == \
                    {k: v for k, v in r["export"].items() if k != "size"}
+
+
+def test_each_case_is_in_its_hosts_scene_of_the_corpus_record(corpus, built):
+    """Calibrators fitted on the corpus's record and this suite together leave a host and its cases out as one."""
+    folder, _ = built
+    host_scene = {}
+    # Named as `forensics validate CORPUS` names a set's photos: set-prefixed file stems, the set as a condition.
+    for set_name, set_folder in find_sets(corpus):
+        if set_name.startswith("authentic_buildings/"):
+            for row in truth_rows(set_folder):
+                if row["label"] == "authentic":
+                    name = f"{set_name.replace('/', '_')}__{row['file'].rsplit('.', 1)[0]}"
+                    host_scene[f"{set_name.split('/', 1)[1]}/{row['file']}"] = scene(name, {"set": set_name})
+    for c in folder_suite(folder).cases:
+        assert scene(c.name, c.conditions) == host_scene[c.conditions["host"]]
