@@ -393,9 +393,9 @@ def _processing(warp: RadialWarp | None, n_warped: int, earlier: EarlierGrid | N
             "region_ids_listed": [r["id"] for r in records if r["stage"] == "radial step"],
             "rule": (f"with no warp established (fewer than {MIN_REGIONS} regions in directions "
                      f"{MIN_SPREAD_DEG:g} degrees apart), a region whose grid is the first grid moved by one pixel "
-                     f"(0.5 to 1.5, either way) along its own radius, rounded, as where a lens correction's "
-                     f"displacement nears one pixel; a pasted piece's grid lands there by chance for about 2 to 4 "
-                     f"of the 63 other grids"),
+                     f"(0.5 to 1.5, either way) along the radius, rounded, over most of its extent, as where a "
+                     f"lens correction's displacement nears one pixel; a pasted piece's grid lands there by chance "
+                     f"for about 2 to 4 of the 63 other grids"),
         }
     if earlier is not None:
         done.append("cropped off the block grid after a first JPEG compression and saved again")

@@ -95,8 +95,8 @@ _REFITS = 3
 _FINALISTS = 50
 #: Two regions closer in distance than this share of the half diagonal cannot separate the two terms.
 MIN_RADIUS_GAP = 0.05
-#: Widest range of directions (seen from the centre) a region read as a one-pixel step may span.
-STEP_MAX_SPAN_DEG = 30.0
+#: Share of a region box's middle points at which one radial move, rounded, must give the region's shift.
+STEP_MIN_SHARE = 0.6
 #: Points per side of a region box's middle half, and radial moves (pixels), over which a one-pixel step is rounded.
 _STEP_SAMPLES = 5
 _STEP_LENGTHS = np.linspace(0.5, 1.5, 11)
@@ -323,23 +323,35 @@ def field_explained(warp: RadialWarp, regions: Sequence[Region], labels: np.ndar
 
 
 def _one_pixel_steps(bbox: tuple[int, int, int, int], centre: np.ndarray) -> set[tuple[int, int]]:
-    """The shifts, modulo 8, that a radial move of one pixel (0.5 to 1.5, either way) rounds to in a box's middle.
+    """The shifts, modulo 8, that one radial move of about a pixel (0.5 to 1.5, either way) rounds to across a box.
 
-    Empty when the box spans more than ``STEP_MAX_SPAN_DEG`` of directions
-    seen from the centre: there every one-pixel shift is radial somewhere,
-    and a region voting for one grid throughout cannot be a step.
+    A shift counts when some move ``D`` rounds to it, ``rint(D u)`` with
+    ``u`` each point's own direction from the centre, at
+    ``STEP_MIN_SHARE`` or more of the points of the box's middle half: a
+    lens correction's band where ``|D|`` nears one rounds to one vector over
+    the whole stretch of directions where the other coordinate of ``D u``
+    stays below half a pixel (about 60 degrees about an axis, 30 about a
+    diagonal), and the region on that grid is that stretch. A shift only
+    some points of the box would round to is not a step: across a wide box
+    every one-pixel shift is radial somewhere. Empty for a box holding the
+    centre.
     """
     x0, y0, x1, y1 = bbox
     corners = np.array([(x0, y0), (x1, y0), (x0, y1), (x1, y1)], dtype=np.float64) - centre
-    if np.any(np.hypot(*corners.T) < 1.0) or _spread_deg(np.arctan2(corners[:, 1], corners[:, 0])) > STEP_MAX_SPAN_DEG:
+    if np.any(np.hypot(*corners.T) < 1.0) or (x0 <= centre[0] <= x1 and y0 <= centre[1] <= y1):
         return set()
     middle = np.linspace(0.25, 0.75, _STEP_SAMPLES)
     xs, ys = np.meshgrid(x0 + middle * (x1 - x0), y0 + middle * (y1 - y0))
     v = np.column_stack((xs.ravel(), ys.ravel())) - centre
     u = v / np.hypot(*v.T)[:, None]
     d = np.concatenate((-_STEP_LENGTHS, _STEP_LENGTHS))
-    moved = np.rint(u[:, None, :] * d[None, :, None]).astype(int).reshape(-1, 2) % 8
-    return {(int(a), int(b)) for a, b in moved if (a, b) != (0, 0)}
+    moved = np.rint(u[None, :, :] * d[:, None, None]).astype(int) % 8  # (moves, points, 2)
+    out = set()
+    for per_move in moved:
+        shifts, counts = np.unique(per_move, axis=0, return_counts=True)
+        out |= {(int(a), int(b)) for (a, b), n in zip(shifts, counts)
+                if (a, b) != (0, 0) and n >= STEP_MIN_SHARE * len(per_move)}
+    return out
 
 
 def radial_steps(regions: Sequence[Region], origins: Sequence[tuple[int, int]],
@@ -351,9 +363,9 @@ def radial_steps(regions: Sequence[Region], origins: Sequence[tuple[int, int]],
     correction's displacement nears one pixel may still leave one: the
     first grid moved by ``D u`` rounded to whole pixels, ``|D|`` between 0.5
     and 1.5. A pasted piece's grid lands on one of those shifts by chance
-    for 2 to 4 of the 63 other grids at its place (a region spanning more
-    than ``STEP_MAX_SPAN_DEG`` of directions is never read as a step, as a
-    one-pixel shift is radial somewhere in it), so such a region is no evidence of a
+    for 2 to 4 of the 63 other grids at its place (the step must be the
+    rounded radial move over most of the region's box, not at some point of
+    it: across a wide box every one-pixel shift is radial somewhere), so such a region is no evidence of a
     paste over a lens correction: the detector names it as possible
     processing, not as a paste. Only without an established warp (with one,
     :func:`field_explained` judges every region).

@@ -11,7 +11,7 @@ from typing import Any
 from forensics_core import DetectorSpec
 
 NAME = "jpeg_grid"
-VERSION = "2.5.0"
+VERSION = "2.6.0"
 
 REFERENCES = (
     "T. Nikoukhah, J. Anger, T. Ehret, M. Colom, J.-M. Morel, R. Grompone von Gioi, JPEG Grid Detection based on "

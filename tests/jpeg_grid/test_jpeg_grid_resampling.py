@@ -96,3 +96,22 @@ def test_a_lone_region_one_pixel_along_its_radius_is_a_radial_step_and_other_shi
     assert radial_steps(steps + others, [(0, 0)], SHAPE) == [0, 1, 2]
     # Measured from another first grid the same regions are no step.
     assert radial_steps(steps, [(4, 4)], SHAPE) == []
+
+
+def _box(label: int, bbox: tuple[int, int, int, int], grid: tuple[int, int]) -> Region:
+    return Region(label, grid_code(*grid), 500, bbox, -10.0 - label)
+
+
+def test_a_tall_band_left_of_the_centre_one_pixel_out_is_a_step_and_a_shift_it_does_not_round_to_is_not():
+    # As a frame-preserving lens correction at quality 98 leaves it (a Canon photo, k1 -0.08): a band 144 px wide
+    # and 344 px tall, 370 px left of the centre, spanning 60 degrees of directions, whose grid is the first grid
+    # moved one pixel outwards, (-1, 0) = (7, 0). The other coordinate of the move stays below half a pixel across
+    # it, so one move rounds to that shift over the whole band.
+    shape = (2272, 1704)
+    band = (408, 952, 552, 1296)
+    assert radial_steps([_box(0, band, (7, 0))], [(0, 0)], shape) == [0]
+    # Across the radius, diagonal, or two pixels: a pasted piece's grid, not a step.
+    assert radial_steps([_box(i, band, g) for i, g in enumerate([(0, 1), (7, 1), (6, 0)])], [(0, 0)], shape) == []
+    # A shift one move gives at a corner of a wide box only is no step either.
+    wide = (100, 100, 1600, 1000)
+    assert radial_steps([_box(0, wide, (7, 7))], [(0, 0)], shape) == []

@@ -28,7 +28,7 @@ def _run(host, path):
 def test_plugin_registers_the_detector(host):
     assert "jpeg_grid" in host.detectors
     spec = host.detectors["jpeg_grid"].spec
-    assert spec.version == "2.5.0" and len(spec.references) >= 2
+    assert spec.version == "2.6.0" and len(spec.references) >= 2
     assert spec.default_params["nfa_threshold"] == 1.0
 
 
