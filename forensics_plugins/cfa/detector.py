@@ -36,7 +36,7 @@ from .residuals import block_features
 from .significance import clopper_pearson, log10_binom_tail
 from .spec import JPEG_GRID, SPEC
 from .votes import SHIFTS, PhaseVotes, phase_votes
-from .warp import mosaic_warp
+from .warp import accounts_for, mosaic_warp, searched
 
 if TYPE_CHECKING:
     from forensics_core import SyntheticCase
@@ -165,7 +165,10 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any], warp: RadialResamplin
         to whole pixels, gives them, the correction is published as
         processing (``details["processing"]``) and regions are those that
         depart from the phase it gave each block, not from the photo's one
-        phase (:mod:`.warp`).
+        phase (:mod:`.warp`). Without it, when regions of another phase
+        appear, a one-term warp proposed by the mosaic itself is tried
+        (:func:`.warp.searched`), and used when the mosaic follows it and it
+        accounts for the other-diagonal blocks (:func:`.warp.accounts_for`).
 
     Returns
     -------
@@ -246,29 +249,49 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any], warp: RadialResamplin
     chroma = np.stack([feats.colour, feats.green], axis=2)
     mosaic = mosaic_warp(warp, votes.t_diag, diag_voting, block, (h, w)) if warp is not None else None
     follows = mosaic is not None and mosaic.follows
-    # In a photo whose mosaic a lens correction moved, each block is asked about the phase the correction gave it.
-    asked = (mosaic.questions(votes.t_diag, votes.t_rb, diag_voting, rb_voting) if follows else
-             (("diagonal", votes.t_diag < 0, diag_voting), ("red_blue", votes.t_rb < 0, rb_voting)))
-    questions, share = [], {}
-    for kind, disagree, voting in asked:
-        null = null_rates(disagree, voting, chroma)
-        # Reported: how much of the photo is of a colour that votes against as a rule.
-        share[kind] = round(float((null[voting] > 0.5).mean()), 4) if voting.any() else 0.0
-        questions.append(Question(kind, disagree, voting, null))
-    details["colour_against_share"] = share
-    result = scan(questions, eps)
+
+    def scanned(follows: bool) -> tuple[list[Question], dict[str, float], Scan]:
+        # In a photo whose mosaic a lens correction moved, each block is asked about the phase it was given.
+        asked = (mosaic.questions(votes.t_diag, votes.t_rb, diag_voting, rb_voting) if follows else
+                 (("diagonal", votes.t_diag < 0, diag_voting), ("red_blue", votes.t_rb < 0, rb_voting)))
+        questions, share = [], {}
+        for kind, disagree, voting in asked:
+            null = null_rates(disagree, voting, chroma)
+            # Reported: how much of the photo is of a colour that votes against as a rule.
+            share[kind] = round(float((null[voting] > 0.5).mean()), 4) if voting.any() else 0.0
+            questions.append(Question(kind, disagree, voting, null))
+        return questions, share, scan(questions, eps)
+
+    questions, share, result = scanned(follows)
+    warp_source = "jpeg_grid"
     explained: list[tuple[Region, dict[str, Any]]] = []
     if result.regions and not follows:
         plain = result
-        checks, questions, result = _drifted(votes, questions, chroma, plain, block, (h, w), eps)
-        details["drift_checks"] = {"rule": DRIFT_RULE, "regions": checks}
+        checks, _, drifted = _drifted(votes, questions, chroma, plain, block, (h, w), eps)
         explained = [(r, c) for r, c in zip(plain.regions, checks) if c is not None and c["explained"]]
-        if explained:
-            span = max(c["span_px"] for _, c in explained)
-            details[PROCESSING_KEY] = Processing(
-                "slight resampling", f"resampled slightly as a whole after demosaicing: its colour mosaic drifts "
-                f"smoothly by up to {span:.1f} px across the frame, as when a camera scales its sensor's image to the "
-                "output size or an editor slightly resizes, rotates or shears the photo").to_details()
+        # A drift explains a region by the mosaic around it; failing that, the whole mosaic may follow a lens
+        # correction jpeg_grid could not establish, proposed by the blocks themselves.
+        candidate = None
+        if not explained and warp is None:
+            proposed = searched(votes.t_diag, diag_voting, block, (h, w))
+            candidate = mosaic_warp(proposed[0], votes.t_diag, diag_voting, block, (h, w), proposed[1]) \
+                if proposed is not None else None
+        accounts = candidate is not None and accounts_for(candidate, votes.t_diag, diag_voting)
+        if candidate is not None and candidate.follows and accounts:
+            mosaic, follows, warp_source = candidate, True, "the mosaic itself"
+            _, share, result = scanned(True)
+        else:
+            if candidate is not None:
+                details["warp_searched"] = {**candidate.record(), "accounts_for_other_diagonal": accounts}
+            details["drift_checks"] = {"rule": DRIFT_RULE, "regions": checks}
+            result = drifted
+    details["colour_against_share"] = share
+    if explained:
+        span = max(c["span_px"] for _, c in explained)
+        details[PROCESSING_KEY] = Processing(
+            "slight resampling", f"resampled slightly as a whole after demosaicing: its colour mosaic drifts "
+            f"smoothly by up to {span:.1f} px across the frame, as when a camera scales its sensor's image to the "
+            "output size or an editor slightly resizes, rotates or shears the photo").to_details()
     timer.lap("scan")
     vote_rate = diag["votes"] / (ny * nx)
     details["power"] = {
@@ -291,7 +314,7 @@ def analyse(pixels: np.ndarray, params: Mapping[str, Any], warp: RadialResamplin
         details[PROCESSING_KEY] = {
             **Processing("radial resampling", "resampled by a radial warp about its centre, which moved its colour "
                          "mosaic by whole pixels in rings, as lens correction does").to_details(),
-            "mosaic": mosaic.record(),
+            "mosaic": {**mosaic.record(), "warp_from": warp_source},
         }
     elif mosaic is not None:
         details["warp_checked"] = mosaic.record()
@@ -352,7 +375,10 @@ def _processing_text(details: dict[str, Any]) -> str:
                 "and the photo scanned again without them.")
     m = processing["mosaic"]
     p = f"{10 ** m['log10_p']:.1g}" if m["log10_p"] > -300 else f"10^{m['log10_p']:.0f}"
-    return (f" The mosaic follows the lens correction that jpeg_grid found, moved by its displacement rounded to "
+    found = ("that jpeg_grid found" if m.get("warp_from", "jpeg_grid") == "jpeg_grid" else
+             "that its own phases show (a one-term radial profile searched on the blocks, accounting for most of "
+             "those on the other diagonal)")
+    return (f" The mosaic follows the lens correction {found}, moved by its displacement rounded to "
             f"whole pixels (blocks agree with the phase it predicts on {m['agree']} of {m['votes']}, p = {p}): "
             "that is processing, and each block was judged against the phase the correction gave it.")
 

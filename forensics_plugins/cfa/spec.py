@@ -11,7 +11,7 @@ from typing import Any
 from forensics_core import DetectorSpec
 
 NAME = "cfa"
-VERSION = "1.3.0"
+VERSION = "1.4.0"
 #: Its lens-correction warp explains regions of the other diagonal (:mod:`forensics_plugins.cfa.warp`).
 JPEG_GRID = "jpeg_grid"
 

@@ -21,7 +21,10 @@ own shares of the other diagonal would make them by chance: binomial tail
 at most :data:`MAX_LOG10_P`, doubled for the choice of which diagonal is
 the photo's own; the profile first refitted to the mosaic, :func:`fitted`),
 and then asks the region scan's questions against the predicted phase
-instead of the photo's one phase. A pasted piece keeps its
+instead of the photo's one phase. Where jpeg_grid establishes no warp,
+the detector proposes one from the mosaic itself (:func:`searched`), and
+uses it only when it also accounts for the blocks on the other diagonal
+(:func:`accounts_for`). A pasted piece keeps its
 own mosaic over its whole extent, which departs from the warp's rings
 unless it happens to lie where they put that phase.
 
@@ -56,6 +59,14 @@ _FIT_STEPS = 21
 _FIT_BLOCKS = 12000
 #: Pixels sampled along each side of a block (evenly spread) to predict its parity.
 _SAMPLES = 4
+#: Without a warp from jpeg_grid, one-term profiles ``D = a (r / R)^3`` searched, |a| up to this share of the half
+#: diagonal (beyond the corner displacement of any lens correction of k1 up to about 0.2), in steps of ``_SEARCH_STEP_PX``.
+SEARCH_MAX_SHARE = 0.08
+_SEARCH_STEP_PX = 0.25
+#: A warp the mosaic itself proposes must account for its other-diagonal blocks: at least this share of the
+#: decisive blocks it moves by an odd sum vote for the other diagonal, and of those voting so, it moved that share.
+SEARCH_MIN_PRECISION = 0.5
+SEARCH_MIN_RECALL = 0.5
 
 
 @dataclass(frozen=True)
@@ -198,8 +209,78 @@ def fitted(warp: RadialResampling, t_diag: np.ndarray, voting: np.ndarray, block
     return RadialResampling(a, b)
 
 
+def searched(t_diag: np.ndarray, voting: np.ndarray, block: int,
+             shape: tuple[int, int]) -> tuple[RadialResampling, int] | None:
+    """The one-term radial warp whose rounded displacement best matches the blocks' diagonal votes, and how many
+    profiles were tried.
+
+    Where jpeg_grid establishes no warp (the first compression's grid did
+    not survive, or survives in one band only), a lens correction that keeps
+    the frame's scale at the centre (``cv2.undistort``'s default, no zoom)
+    still moves the mosaic by ``D(r) = a (r / R)^3``, rounded at each pixel
+    (paper eqs. 1-5: the one-term radial model), and leaves arcs of the
+    other diagonal about each axis where ``D`` rounds to an odd sum. As
+    ``D`` and ``-D`` round to the same parities, the mosaic shows the
+    displacement's size, not whether the correction pushed pixels outwards
+    or inwards: ``a`` is searched positive. The
+    profiles ``a`` from 1 px to :data:`SEARCH_MAX_SHARE` of the half
+    diagonal ``R`` are tried in steps of :data:`_SEARCH_STEP_PX` on the
+    voting blocks' centres (at most :data:`_FIT_BLOCKS`), scored as
+    :func:`fitted` scores them; :func:`mosaic_warp` then refits both terms
+    and tests the best, its Bonferroni factor multiplied by the profiles
+    tried here.
+
+    Returns
+    -------
+    (RadialResampling, int) or None
+        None when no block votes.
+    """
+    ys, xs = np.nonzero(voting)
+    if ys.size == 0:
+        return None
+    if ys.size > _FIT_BLOCKS:
+        pick = np.linspace(0, ys.size - 1, _FIT_BLOCKS).astype(np.intp)
+        ys, xs = ys[pick], xs[pick]
+    dy0, dx0 = (np.asarray(v)[None, :] for v in RadialResampling(1.0, 0.0).displacement(
+        ys * block + block / 2.0, xs * block + block / 2.0, shape))
+    observed = (t_diag[ys, xs] < 0)[None, :]
+    half_diagonal = float(np.hypot(*shape)) / 2.0
+    # A displacement and its opposite round to the same parities: the mosaic shows D's size, not its direction.
+    candidates = np.arange(1.0, SEARCH_MAX_SHARE * half_diagonal, _SEARCH_STEP_PX)
+    best_a, best_score = 0.0, -1
+    for chunk in np.array_split(candidates, max(1, candidates.size // 128)):
+        a = chunk[:, None]
+        odd = (np.rint(a * dy0) + np.rint(a * dx0)) % 2 != 0
+        agree = (odd == observed).sum(axis=1)
+        score = np.maximum(agree, ys.size - agree)
+        k = int(np.argmax(score))
+        if score[k] > best_score:
+            best_a, best_score = float(chunk[k]), int(score[k])
+    return RadialResampling(best_a, 0.0), int(candidates.size)
+
+
+def accounts_for(mosaic: MosaicWarp, t_diag: np.ndarray, voting: np.ndarray) -> bool:
+    """Whether a warp the mosaic proposed accounts for its other-diagonal blocks, not only agrees beyond chance.
+
+    Agreement beyond the chance the two maps' shares give is met by any
+    overlap of structure: a pasted piece of the other diagonal crossed by
+    one arc of a profile agrees more than chance. A lens correction moves
+    the mosaic onto the other diagonal in arcs throughout, so most of the
+    decisive blocks it moves by an odd sum vote for the other diagonal
+    (precision at least :data:`SEARCH_MIN_PRECISION`), and most of those
+    voting so lie where it moved them (recall at least
+    :data:`SEARCH_MIN_RECALL`); a piece fills only part of an arc.
+    """
+    decisive = voting & _decisive(mosaic.other_diagonal)
+    predicted = decisive & (mosaic.other_diagonal > 0.5)
+    voted = decisive & (t_diag < 0)
+    both = int((predicted & voted).sum())
+    return bool(predicted.any() and voted.any() and both >= SEARCH_MIN_PRECISION * predicted.sum()
+                and both >= SEARCH_MIN_RECALL * voted.sum())
+
+
 def mosaic_warp(warp: RadialResampling, t_diag: np.ndarray, voting: np.ndarray, block: int,
-                shape: tuple[int, int]) -> MosaicWarp:
+                shape: tuple[int, int], tried: int = 1) -> MosaicWarp:
     """Whether the blocks' diagonal votes follow the warp, and where it puts the other diagonal.
 
     Parameters
@@ -213,6 +294,9 @@ def mosaic_warp(warp: RadialResampling, t_diag: np.ndarray, voting: np.ndarray, 
         Block side, pixels.
     shape : (H, W)
         The stored grid's size, pixels.
+    tried : int
+        Profiles tried before ``warp`` was chosen (:func:`searched`), for the
+        Bonferroni factor; 1 for a warp jpeg_grid established.
     """
     warp = fitted(warp, t_diag, voting, block, shape)
     parities = shift_parities(warp, t_diag.shape, block, shape)
@@ -230,7 +314,7 @@ def mosaic_warp(warp: RadialResampling, t_diag: np.ndarray, voting: np.ndarray, 
         rate = min(max(p_obs * p_pred + (1 - p_obs) * (1 - p_pred), 1e-9), 1 - 1e-9)
         tail = float(log10_binom_tail(np.array([k]), np.array([n]), rate)[0]) if n else 0.0
         # Bonferroni over the profiles tried and the two choices of the photo's own diagonal.
-        log10_p = tail + np.log10(2.0 * _FIT_STEPS**2 * 2)
+        log10_p = tail + np.log10(2.0 * _FIT_STEPS**2 * 2 * tried)
         if best is None or log10_p < best.log10_p:
             best = MosaicWarp(candidate.other_diagonal, candidate.red_blue, k, n, rate, float(min(0.0, log10_p)),
                               (warp.a, warp.b))

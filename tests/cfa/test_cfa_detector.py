@@ -104,6 +104,6 @@ def test_strong_jpeg_or_resizing_is_inconclusive(pair, quality, resize):
 
 
 def test_spec_declares_every_parameter():
-    assert SPEC.name == "cfa" and SPEC.version == "1.3.0"
+    assert SPEC.name == "cfa" and SPEC.version == "1.4.0"
     assert set(SPEC.default_params) == set(DEFAULT_PARAMS)
     assert len(SPEC.references) >= 4
