@@ -32,7 +32,8 @@ from ..findings import ExifSummary, Findings, Status, Verdict
 from ..fusion import LR_POLICY
 from ..plugins import PluginHost, localise_map
 from ..text import visible
-from ..validation.record import ValidationRecord
+from ..validation.record import SHIPPED_REALISTIC, ValidationRecord, shipped_record
+from ..validation.null_check import VERDICT
 from . import images, wording
 from .error_rates import ErrorRates, given_error_rates, shipped_error_rates
 from .tables import csv_bytes
@@ -257,7 +258,28 @@ def _where(findings: Findings, evidence: Evidence, host: PluginHost | None) -> d
             flagged.append(finding.name)
     data = images.where_figure(evidence.pixels, masks)
     return {"src": images.data_url(data, "image/jpeg"), "flagged": flagged,
-            "colours": {findings.detectors[i].name: i % len(images.WHERE_COLOURS) for i, _ in masks}}
+            "colours": {findings.detectors[i].name: i % len(images.WHERE_COLOURS) for i, _ in masks},
+            "validated": _where_validated(flagged)}
+
+
+def _where_validated(flagged: list[str]) -> str:
+    """How well the Where map and the flagged detectors' maps found forged pixels in the shipped realistic record.
+
+    Empty when no such record is shipped or it predates the Where map's
+    scores (pixel F1, :mod:`forensics_core.validation.record`).
+    """
+    try:
+        record = shipped_record(SHIPPED_REALISTIC)
+    except (OSError, ValueError, KeyError, TypeError):
+        return ""
+    where = record.method(VERDICT) if record is not None else None
+    if where is None or where.localisation is None or where.localisation.f1_mean is None:
+        return ""
+    own = [(n, m.localisation) for n in flagged if (m := record.method(n)) is not None and m.localisation]
+    each = "; " + ", ".join(f"{n}'s own map {loc.f1_mean:.2f}" for n, loc in own) if own else ""
+    return (f"On {where.localisation.n} forgeries with known masks made from real photos (the realistic "
+            f"validation record), this map's mean pixel F1 was {where.localisation.f1_mean:.2f}{each} "
+            f"(1 outlines exactly the forged pixels).")
 
 
 def _summary(findings: Findings) -> dict[str, Any]:

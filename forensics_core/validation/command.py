@@ -51,7 +51,8 @@ def validate_command(ctx, *, suites, out_dir, detectors, workers, seed, count, c
     the sets (see the README). Every photo gets the condition `set`.
     Per detector and for the fused verdict: ROC AUC with a bootstrap 95%
     interval, TPR at FPR 1% and 5%, the operating point, per-condition and
-    per-set figures, localisation MCC and IoU where masks exist, how often
+    per-set figures, localisation (pixel F1, MCC, IoU; each detector's map
+    and the report's Where map, overall and per set) where masks exist, how often
     each detector declined, and whether its p-values hold on the authentic
     photos (their empirical CDF and the photos it convicts).
     """

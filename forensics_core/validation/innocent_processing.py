@@ -18,9 +18,12 @@ without EXIF:
     OpenCV's undistortion (``initUndistortRectifyMap`` and ``remap``, as
     ``cv2.undistort``) of a one-term radial model, k1 in [-0.10, -0.04] or
     [0.03, 0.08], focal length 0.9 times the larger side, principal point at
-    the centre, the new camera matrix filling the frame (alpha 0); each of
-    the nearest, linear, cubic and Lanczos-4 interpolations equally often,
-    and half of each at JPEG quality 98 or 100 (where resampling that keeps
+    the centre; of every 16 cases, 8 with the new camera matrix filling the
+    frame (alpha 0, an editor's crop-to-fill) and 8 keeping the camera
+    matrix (``cv2.undistort``'s default: no zoom, the frame's scale kept at
+    the centre, where the warp is nearest the identity); each of the nearest,
+    linear, cubic and Lanczos-4 interpolations equally often in both, and
+    half of each at JPEG quality 98 or 100 (where resampling that keeps
     the old JPEG grid's traces is a known false alarm), half at 85, 92 or 95;
 ``rotation``
     0.5-3 degrees either way, Pillow bicubic, cropped to the largest
@@ -293,7 +296,9 @@ def _png_export(rng: np.random.Generator, index: int) -> Export:
 def _draw_lens(rng: np.random.Generator, index: int, size: tuple[int, int]) -> dict[str, object]:
     return {"k1": _uniform(rng, _pick(rng, _K1_RANGES), 4), "focal_px": round(_FOCAL_SHARE * max(size), 2),
             "centre": [(size[0] - 1) / 2, (size[1] - 1) / 2],
-            "interpolation": _LENS_INTERPOLATIONS[index // 2 % len(_LENS_INTERPOLATIONS)]}
+            "interpolation": _LENS_INTERPOLATIONS[index // 2 % len(_LENS_INTERPOLATIONS)],
+            # Decided by the index, not drawn, so that the other cases' draws stay as they were.
+            "fill_frame": index // (2 * len(_LENS_INTERPOLATIONS)) % 2 == 0}
 
 
 def _lens_correction(pixels: np.ndarray, settings: Settings) -> np.ndarray:
@@ -303,8 +308,10 @@ def _lens_correction(pixels: np.ndarray, settings: Settings) -> np.ndarray:
     f, (cx, cy) = settings["focal_px"], settings["centre"]
     camera = np.array([[f, 0, cx], [0, f, cy], [0, 0, 1]])
     distortion = np.array([settings["k1"], 0, 0, 0])
-    # Editors fill the frame after correcting: alpha 0 scales so that every output pixel comes from the photo.
-    new, _ = cv2.getOptimalNewCameraMatrix(camera, distortion, (w, h), 0, (w, h), centerPrincipalPoint=True)
+    # An editor's crop-to-fill: alpha 0 scales so that every output pixel comes from the photo. Without it the
+    # camera matrix is kept, as cv2.undistort does, and the corners take the border's pixels.
+    new = cv2.getOptimalNewCameraMatrix(camera, distortion, (w, h), 0, (w, h), centerPrincipalPoint=True)[0] \
+        if settings.get("fill_frame", True) else camera
     maps = cv2.initUndistortRectifyMap(camera, distortion, None, new, (w, h), cv2.CV_16SC2)
     return cv2.remap(pixels, *maps, _opencv(settings["interpolation"]), borderMode=cv2.BORDER_REPLICATE)
 

@@ -108,6 +108,12 @@ def mcc(pred: np.ndarray, truth: np.ndarray) -> float:
     return 0.0 if denom == 0 else (tp * tn - fp * fn) / denom
 
 
+def f1(pred: np.ndarray, truth: np.ndarray) -> float:
+    """Pixel F1 (Dice) of two boolean maps: 2 TP / (2 TP + FP + FN), 0 when both are empty."""
+    both = np.count_nonzero(pred) + np.count_nonzero(truth)
+    return 0.0 if both == 0 else float(2 * np.count_nonzero(pred & truth) / both)
+
+
 def iou(pred: np.ndarray, truth: np.ndarray) -> float:
     """Intersection over union of two boolean maps (0 when both are empty)."""
     union = np.count_nonzero(pred | truth)

@@ -6,6 +6,7 @@ import base64
 import io
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -179,7 +180,18 @@ def render_page(record: ValidationRecord, thumbnails: Mapping[tuple[str, str], P
         record=record, roc=_data_url(roc_svg(record.methods), "image/svg+xml"), verdict_name=VERDICT,
         css=template_text("report.css"), bootstrap_samples=BOOTSTRAP_SAMPLES, ecdfs=ecdfs,
         levels=[f"{t:g}" for t in NULL_LEVELS], convictions=convictions(record.cases, record.null_checks),
-        thumbnails=thumbs, lr=lr, lr_figures=lr_figures)
+        thumbnails=thumbs, lr=lr, lr_figures=lr_figures, localisation=_localisation_rows(record))
+
+
+def _localisation_rows(record: ValidationRecord) -> list[tuple[str, str, Any]]:
+    """(method, condition, Localisation) for every method that localises: over all photos, then per condition."""
+    rows = []
+    for m in record.methods:
+        if m.localisation is None:
+            continue
+        rows.append((m.name, "all", m.localisation))
+        rows += [(m.name, f"{c.key} {c.value}", c.localisation) for c in m.by_condition if c.localisation is not None]
+    return rows
 
 
 def write_page(record: ValidationRecord, folder: Path,

@@ -31,6 +31,9 @@ SHIPPED_REAL = "real.json"
 SHIPPED_INNOCENT = "innocent_processing.json"
 """The record of the innocent-processing suite shipped beside them (``make validate-innocent-processing``):
 the false alarms of every detector and of the verdict on processed authentic photos."""
+SHIPPED_REALISTIC = "realistic.json"
+"""The record of the realistic suite (``make validate-realistic``): forgeries with true masks made from the real
+corpus, on which the calibrators are also fitted and the report's Where map is scored."""
 
 FOUND_IOU = 0.5
 
@@ -62,6 +65,7 @@ class ConditionMetrics:
     tpr: Rate
     fpr: Rate
     declined: Rate
+    localisation: Localisation | None = None
 
 
 @dataclass
@@ -73,6 +77,26 @@ class Localisation:
     iou_mean: float
     found: Rate
     """Share of those photos with IoU >= :data:`FOUND_IOU`."""
+    f1_mean: float | None = None
+    """Mean pixel F1 (Dice); None in records made before it was kept."""
+
+    @classmethod
+    def of(cls, rows: Sequence[_Row]) -> Localisation | None:
+        """Over the spliced rows with a true mask; None when there are none."""
+        loc = [r for r in rows if r.spliced and r.iou is not None]
+        if not loc:
+            return None
+        return cls(len(loc), float(np.mean([r.mcc for r in loc])), float(np.mean([r.iou for r in loc])),
+                   rate(sum(r.iou >= FOUND_IOU for r in loc), len(loc)), float(np.mean([r.f1 for r in loc])))
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any] | None) -> Localisation | None:
+        if not d:
+            return None
+        found = d["found"]
+        return cls(d["n"], d["mcc_mean"], d["iou_mean"],
+                   Rate(found["k"], found["n"], found["value"], tuple(found["ci"]) if found["ci"] else None),
+                   d.get("f1_mean"))
 
 
 @dataclass
@@ -147,15 +171,17 @@ class ValidationRecord:
 
         def method(m):
             op = m["operating_point"]
-            loc = m["localisation"]
+            loc = m.get("localisation")
             return MethodMetrics(
                 **{**m,
                    "auc_ci": tuple(m["auc_ci"]) if m["auc_ci"] else None,
                    "operating_point": OperatingPoint(op["rule"], r(op["tpr"]), r(op["fpr"])),
                    "declined_spliced": r(m["declined_spliced"]), "declined_authentic": r(m["declined_authentic"]),
-                   "localisation": Localisation(loc["n"], loc["mcc_mean"], loc["iou_mean"], r(loc["found"])) if loc else None,
+                   "localisation": Localisation.from_dict(loc),
                    "by_condition": [ConditionMetrics(**{**c, "tpr": r(c["tpr"]), "fpr": r(c["fpr"]),
-                                                        "declined": r(c["declined"])}) for c in m["by_condition"]],
+                                                        "declined": r(c["declined"]),
+                                                        "localisation": Localisation.from_dict(c.get("localisation"))})
+                                    for c in m["by_condition"]],
                    "roc": [tuple(p) for p in m["roc"]]})
 
         return cls(**{**data, "dataset": Dataset(**data["dataset"]), "methods": [method(m) for m in data["methods"]],
@@ -197,7 +223,8 @@ def read_record(path: Path) -> ValidationRecord:
 
 
 def shipped_record(name: str = SHIPPED) -> ValidationRecord | None:
-    """The record ``name`` (:data:`SHIPPED`, :data:`SHIPPED_REAL` or :data:`SHIPPED_INNOCENT`) shipped with this release, or None when absent."""
+    """The record ``name`` (:data:`SHIPPED`, :data:`SHIPPED_REAL`, :data:`SHIPPED_INNOCENT` or
+    :data:`SHIPPED_REALISTIC`) shipped with this release, or None when absent."""
     resource = files(__package__).joinpath(name)
     if not resource.is_file():
         return None
@@ -216,6 +243,7 @@ class _Row:
     errored: bool
     mcc: float | None = None
     iou: float | None = None
+    f1: float | None = None
 
 
 def _method_metrics(name: str, version: str, rows: Sequence[_Row], rule: str) -> MethodMetrics:
@@ -224,11 +252,7 @@ def _method_metrics(name: str, version: str, rows: Sequence[_Row], rule: str) ->
     curve = roc_curve(pos, neg)
     spl = [r for r in rows if r.spliced]
     aut = [r for r in rows if not r.spliced]
-    loc = [r for r in spl if r.iou is not None]
-    localisation = None
-    if loc:
-        localisation = Localisation(len(loc), float(np.mean([r.mcc for r in loc])), float(np.mean([r.iou for r in loc])),
-                                    rate(sum(r.iou >= FOUND_IOU for r in loc), len(loc)))
+    localisation = Localisation.of(spl)
     return MethodMetrics(
         name=name, version=version, n_spliced=len(spl), n_authentic=len(aut),
         auc=roc_auc(pos, neg), auc_ci=auc_bootstrap_ci(pos, neg),
@@ -270,6 +294,7 @@ def _by_condition(rows: Sequence[_Row]) -> list[ConditionMetrics]:
                 auc=roc_auc(np.array([r.suspicion for r in spl]), np.array([r.suspicion for r in aut])),
                 tpr=rate(sum(r.flagged for r in spl), len(spl)), fpr=rate(sum(r.flagged for r in aut), len(aut)),
                 declined=rate(sum(not r.decided for r in subset), len(subset)),
+                localisation=Localisation.of(spl),
             ))
     return out
 
@@ -308,12 +333,13 @@ def compute_methods(
             else:
                 flagged = decided and (d.score or 0.0) > 0.0
             return _Row(r.spliced, r.conditions, suspicion(d.p_value if with_p else None, d.score, decided),
-                        decided, flagged, d.status is Status.ERROR, d.mcc, d.iou)
+                        decided, flagged, d.status is Status.ERROR, d.mcc, d.iou, d.f1)
 
         methods.append(_method_metrics(name, versions.get(name, "unknown"), [row(r) for r in taken], rule))
     verdict_rows = [
         _Row(r.spliced, r.conditions, suspicion(r.verdict_p, None, r.verdict is not VerdictLabel.INCONCLUSIVE),
-             r.verdict is not VerdictLabel.INCONCLUSIVE, r.verdict is VerdictLabel.INCONSISTENT, False)
+             r.verdict is not VerdictLabel.INCONCLUSIVE, r.verdict is VerdictLabel.INCONSISTENT, False,
+             *((r.where["mcc"], r.where["iou"], r.where["f1"]) if r.where else ()))
         for r in taken
     ]
     methods.append(_method_metrics(VERDICT, "", verdict_rows, VERDICT_RULE))
@@ -327,7 +353,8 @@ def case_rows(results: Sequence[CaseResult]) -> list[dict[str, Any]]:
          "format": r.format, "megapixels": r.megapixels,
          "verdict": r.verdict.value if r.verdict else None, "verdict_p": r.verdict_p,
          "detectors": {n: {"status": d.status.value, "p_value": d.p_value, "score": d.score, "iou": d.iou}
-                       for n, d in sorted(r.detectors.items())}}
+                       for n, d in sorted(r.detectors.items())},
+         **({"where": r.where} if r.where is not None else {})}
         for r in results
     ]
 

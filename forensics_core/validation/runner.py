@@ -14,12 +14,13 @@ import numpy as np
 
 from ..analysis import Options, analyze_evidence
 from ..evidence import EvidenceError, load_evidence
-from ..findings import DetectorFinding, Findings, Status, VerdictLabel
+from ..findings import Findings, Status, VerdictLabel
 from ..fusion import finding_p
 from ..atomic import write_atomic
 from ..plugins import PluginHost, localise_map, one_line
+from ..report.wording import found_something
 from .cases import Case, load_mask
-from .metrics import iou, mcc
+from .metrics import f1, iou, mcc
 
 
 @dataclass
@@ -33,6 +34,7 @@ class DetectorOutcome:
     elapsed_s: float
     mcc: float | None = None
     iou: float | None = None
+    f1: float | None = None
 
 
 @dataclass
@@ -49,6 +51,9 @@ class CaseResult:
     error: str | None = None
     format: str | None = None
     megapixels: float | None = None
+    where: dict[str, float] | None = None
+    """The report's Where map (every flagged detector's map, joined) against the true mask: ``mcc``, ``iou``,
+    ``f1``; None without a mask."""
 
 
 # The plugins the workers use: set before the pool forks, so that every worker
@@ -57,9 +62,8 @@ class CaseResult:
 _HOST: PluginHost | None = None
 
 
-def _localise(host: PluginHost, finding: DetectorFinding, truth: np.ndarray) -> tuple[float, float] | None:
-    pred = localise_map(host, finding, truth.shape)
-    return None if pred is None else (mcc(pred, truth), iou(pred, truth))
+def _scores(pred: np.ndarray, truth: np.ndarray) -> dict[str, float]:
+    return {"mcc": mcc(pred, truth), "iou": iou(pred, truth), "f1": f1(pred, truth)}
 
 
 def analyse_case(case: Case, options: Options, findings_dir: Path) -> CaseResult:
@@ -74,13 +78,20 @@ def analyse_case(case: Case, options: Options, findings_dir: Path) -> CaseResult
     findings: Findings = analyze_evidence(evidence, host, options)
     write_atomic(findings_dir / f"{case.name}.json", findings.to_json().encode("utf-8"))
     truth = load_mask(case.mask, evidence.luma.shape) if case.mask is not None else None
+    where = None if truth is None or not case.spliced else np.zeros(truth.shape, dtype=bool)
     for f in findings.detectors:
         outcome = DetectorOutcome(f.status, finding_p(f), f.score, f.error, f.elapsed_s)
-        if truth is not None and case.spliced:
-            scores = _localise(host, f, truth)
-            if scores is not None:
-                outcome.mcc, outcome.iou = scores
+        if where is not None:
+            pred = localise_map(host, f, truth.shape)
+            if pred is not None:
+                scores = _scores(pred, truth)
+                outcome.mcc, outcome.iou, outcome.f1 = scores["mcc"], scores["iou"], scores["f1"]
+                # The report's page 1 outlines the maps of the detectors that found something, and only those.
+                if found_something(f, findings.verdict):
+                    where |= pred
         base.detectors[f.name] = outcome
+    if where is not None:
+        base.where = {k: round(v, 6) for k, v in _scores(where, truth).items()}
     v = findings.verdict
     base.sha256, base.verdict, base.verdict_p = evidence.info.sha256, v.label, v.p_value
     base.format, base.megapixels = evidence.info.format, round(evidence.info.width * evidence.info.height / 1e6, 3)

@@ -385,3 +385,13 @@ def test_one_processing_seen_by_two_detectors_is_one_line_on_page_one(tmp_path):
     assert lines == [("processed_crop", "cropped off the block grid after a first JPEG compression and saved again"),
                      ("processed_grid, processed_mosaic",
                       "resampled by a radial warp about its centre, as lens correction does")]
+
+
+def test_the_where_caption_states_how_well_the_map_found_forged_pixels_on_the_shipped_realistic_record():
+    from forensics_core.report.render import _where_validated
+    from forensics_core.validation.record import SHIPPED_REALISTIC, shipped_record
+
+    where = shipped_record(SHIPPED_REALISTIC).method("verdict").localisation
+    text = _where_validated(["jpeg_grid", "no_such_detector"])
+    assert f"On {where.n} forgeries with known masks" in text and f"mean pixel F1 was {where.f1_mean:.2f}" in text
+    assert "jpeg_grid's own map" in text and "no_such_detector" not in text

@@ -11,7 +11,7 @@ from test_lens_splices import (build_reading_only, draw_corpus, pixels, says_the
 from forensics_core.validation import SuiteError, folder_suite
 from forensics_core.validation.innocent_processing import CHAINS, SuiteSize, build_innocent_processing
 
-SIZE = SuiteSize(lens_correction=8, per_chain=1)
+SIZE = SuiteSize(lens_correction=16, per_chain=1)
 CAMERAS = {"acme": ("ACME", "ACME Model One", (480, 360)), "bravo": ("Bravo", "Bravo Two", (300, 420)),
            "opensfm_lund": ("", "", (400, 300))}
 RESAMPLING_CHAINS = {"lens_correction", "rotation", "keystone", "resize_down", "resize_up"}
@@ -36,9 +36,9 @@ def test_every_chain_is_there_and_every_photo_authentic(built):
     folder, _ = built
     rows = truth_rows(folder)
     kinds = [r["kind"] for r in rows]
-    assert {k: kinds.count(k) for k in set(kinds)} == {c.name: 8 if c.name == "lens_correction" else 1 for c in CHAINS}
+    assert {k: kinds.count(k) for k in set(kinds)} == {c.name: 16 if c.name == "lens_correction" else 1 for c in CHAINS}
     suite = folder_suite(folder)
-    assert len(suite.cases) == 18 and not any(c.spliced or c.mask for c in suite.cases)
+    assert len(suite.cases) == 26 and not any(c.spliced or c.mask for c in suite.cases)
     assert all(set(r) == {"file", "label", "kind", "jpeg_quality", "host", "interpolation", "subsampling"}
                for r in rows)
     for r in rows:
@@ -76,6 +76,13 @@ def test_lens_corrections_cover_every_interpolation_and_half_are_saved_at_98_or_
     assert {r["settings"]["interpolation"] for r in lens} == {"nearest", "linear", "cubic", "lanczos4"}
     assert sum(r["export"]["jpeg_quality"] >= 98 for r in lens) == len(lens) // 2
     assert all(-0.10 <= r["settings"]["k1"] <= -0.04 or 0.03 <= r["settings"]["k1"] <= 0.08 for r in lens)
+    # Half fill the frame (an editor's crop-to-fill), half keep the camera matrix (cv2.undistort's default), each
+    # with every interpolation and both quality sets.
+    for fill in (True, False):
+        some = [r for r in lens if r["settings"]["fill_frame"] is fill]
+        assert len(some) == 8 and {r["settings"]["interpolation"] for r in some} == {"nearest", "linear", "cubic",
+                                                                                      "lanczos4"}
+        assert sum(r["export"]["jpeg_quality"] >= 98 for r in some) == 4
 
 
 def test_a_corpus_of_downscaled_photos_alone_gives_nothing(corpus, tmp_path):

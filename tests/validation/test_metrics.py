@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.stats import mannwhitneyu
 
-from forensics_core.validation.metrics import auc_bootstrap_ci, iou, mcc, rate, roc_auc, roc_curve, suspicion, tpr_at_fpr
+from forensics_core.validation.metrics import auc_bootstrap_ci, f1, iou, mcc, rate, roc_auc, roc_curve, suspicion, tpr_at_fpr
 
 
 def test_auc_is_the_mann_whitney_probability_with_ties_counted_half():
@@ -49,6 +49,11 @@ def test_localisation_scores():
     assert iou(truth, truth) == 1 and mcc(truth, truth) == pytest.approx(1)
     assert mcc(~truth, truth) == pytest.approx(-1)
     assert iou(np.zeros_like(truth), truth) == 0 and mcc(np.zeros_like(truth), truth) == 0
+    half = truth.copy()
+    half[:2] = False
+    # Dice against Jaccard: F1 = 2 J / (1 + J).
+    assert f1(half, truth) == pytest.approx(2 * iou(half, truth) / (1 + iou(half, truth)))
+    assert f1(truth, truth) == 1 and f1(np.zeros_like(truth), np.zeros_like(truth)) == 0
 
 
 def test_declined_results_rank_as_nothing_found():

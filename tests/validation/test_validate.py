@@ -38,10 +38,20 @@ def test_detector_and_verdict_figures(run):
     # The faint squares (every fourth) stay below the decision level.
     assert (op.tpr.k, op.tpr.n, op.fpr.k) == (9, 12, 0)
     assert square.localisation.n == 12 and square.localisation.found.k == 9
+    assert 0.0 < square.localisation.f1_mean <= 1.0
+    # Per condition too (the per-set figures of a corpus), over that condition's manipulated photos.
+    by_kind = {c.value: c.localisation for c in square.by_condition if c.key == "kind"}
+    assert by_kind["bright"].n + by_kind["faint"].n == 12 and by_kind["bright"].f1_mean > by_kind["faint"].f1_mean
     observer = record.method("observer")
     assert observer.declined_spliced.value == 1.0 and observer.auc == 0.5
     verdict = record.method(VERDICT)
     assert verdict.operating_point.tpr.k == 9 and verdict.operating_point.fpr.k == 0
+    # The verdict's localisation is the report's Where map: the maps of the detectors that found something.
+    assert verdict.localisation.n == 12
+    wheres = [c["where"] for c in record.cases if c["spliced"]]
+    assert len(wheres) == 12 and all(set(w) == {"mcc", "iou", "f1"} for w in wheres)
+    # A faint square the detector does not call is outlined nowhere on page 1, so the Where map misses it.
+    assert verdict.localisation.found.k <= square.localisation.found.k
 
 
 def test_per_condition_breakdown(run):
