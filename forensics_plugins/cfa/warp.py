@@ -170,6 +170,25 @@ def shift_parities(warp: RadialResampling, grid: tuple[int, int], block: int, sh
     return np.stack([(parity == c).mean(axis=(2, 3)) for c in range(4)], axis=2)
 
 
+def _voting_sample(t_diag: np.ndarray, voting: np.ndarray, block: int, shape: tuple[int, int]):
+    """The voting blocks' centres (at most :data:`_FIT_BLOCKS`, evenly spread) as the profile searches score them.
+
+    Returns ``((dy_a, dx_a), (dy_b, dx_b), observed)``, each of shape (1, n):
+    the displacement of each term of the profile at unit size, and whether
+    the block votes for the other diagonal; None when no block votes.
+    """
+    ys, xs = np.nonzero(voting)
+    if ys.size == 0:
+        return None
+    if ys.size > _FIT_BLOCKS:
+        pick = np.linspace(0, ys.size - 1, _FIT_BLOCKS).astype(np.intp)
+        ys, xs = ys[pick], xs[pick]
+    centres = (ys * block + block / 2.0, xs * block + block / 2.0)
+    terms = [tuple(np.asarray(v)[None, :] for v in RadialResampling(*unit).displacement(*centres, shape))
+             for unit in ((1.0, 0.0), (0.0, 1.0))]
+    return terms[0], terms[1], (t_diag[ys, xs] < 0)[None, :]
+
+
 def fitted(warp: RadialResampling, t_diag: np.ndarray, voting: np.ndarray, block: int,
            shape: tuple[int, int]) -> RadialResampling:
     """The profile near ``warp``'s whose rounded displacement best matches the blocks' diagonal votes.
@@ -183,17 +202,11 @@ def fitted(warp: RadialResampling, t_diag: np.ndarray, voting: np.ndarray, block
     a grid as fine around the best, for the most blocks whose vote matches
     the parity at their centre (either diagonal taken as the photo's own).
     """
-    ys, xs = np.nonzero(voting)
-    if ys.size == 0:
+    sample = _voting_sample(t_diag, voting, block, shape)
+    if sample is None:
         return warp
-    if ys.size > _FIT_BLOCKS:
-        pick = np.linspace(0, ys.size - 1, _FIT_BLOCKS).astype(np.intp)
-        ys, xs = ys[pick], xs[pick]
-    dy0, dx0 = [np.asarray(v)[None, :] for v in RadialResampling(1.0, 0.0).displacement(
-        ys * block + block / 2.0, xs * block + block / 2.0, shape)]
-    dy1, dx1 = [np.asarray(v)[None, :] for v in RadialResampling(0.0, 1.0).displacement(
-        ys * block + block / 2.0, xs * block + block / 2.0, shape)]
-    observed = (t_diag[ys, xs] < 0)[None, :]
+    (dy0, dx0), (dy1, dx1), observed = sample
+    n = observed.size
     a, b = warp.a, warp.b
     span_a, span_b = _FIT_SPAN * abs(a) + _FIT_MIN_PX, _FIT_SPAN * abs(b) + _FIT_MIN_PX
     for _ in range(2):
@@ -202,7 +215,7 @@ def fitted(warp: RadialResampling, t_diag: np.ndarray, voting: np.ndarray, block
         ta, tb = grid_a.reshape(-1, 1), grid_b.reshape(-1, 1)
         odd = (np.rint(ta * dy0 + tb * dy1) + np.rint(ta * dx0 + tb * dx1)) % 2 != 0
         agree = (odd == observed).sum(axis=1)
-        score = np.maximum(agree, ys.size - agree)
+        score = np.maximum(agree, n - agree)
         best = int(np.argmax(score))
         a, b = float(ta[best, 0]), float(tb[best, 0])
         span_a, span_b = 2.0 * span_a / (_FIT_STEPS - 1), 2.0 * span_b / (_FIT_STEPS - 1)
@@ -235,15 +248,10 @@ def searched(t_diag: np.ndarray, voting: np.ndarray, block: int,
     (RadialResampling, int) or None
         None when no block votes.
     """
-    ys, xs = np.nonzero(voting)
-    if ys.size == 0:
+    sample = _voting_sample(t_diag, voting, block, shape)
+    if sample is None:
         return None
-    if ys.size > _FIT_BLOCKS:
-        pick = np.linspace(0, ys.size - 1, _FIT_BLOCKS).astype(np.intp)
-        ys, xs = ys[pick], xs[pick]
-    dy0, dx0 = (np.asarray(v)[None, :] for v in RadialResampling(1.0, 0.0).displacement(
-        ys * block + block / 2.0, xs * block + block / 2.0, shape))
-    observed = (t_diag[ys, xs] < 0)[None, :]
+    (dy0, dx0), _, observed = sample
     half_diagonal = float(np.hypot(*shape)) / 2.0
     # A displacement and its opposite round to the same parities: the mosaic shows D's size, not its direction.
     candidates = np.arange(1.0, SEARCH_MAX_SHARE * half_diagonal, _SEARCH_STEP_PX)
@@ -252,7 +260,7 @@ def searched(t_diag: np.ndarray, voting: np.ndarray, block: int,
         a = chunk[:, None]
         odd = (np.rint(a * dy0) + np.rint(a * dx0)) % 2 != 0
         agree = (odd == observed).sum(axis=1)
-        score = np.maximum(agree, ys.size - agree)
+        score = np.maximum(agree, observed.size - agree)
         k = int(np.argmax(score))
         if score[k] > best_score:
             best_a, best_score = float(chunk[k]), int(score[k])

@@ -24,13 +24,18 @@ def _nearest(rgb: np.ndarray, warp: RadialResampling) -> np.ndarray:
     return rgb[np.clip(np.rint(y - dy).astype(int), 0, h - 1), np.clip(np.rint(x - dx).astype(int), 0, w - 1)]
 
 
-@pytest.fixture(scope="module")
-def photos():
-    host, donor = synth.make_pair(7, SIZE, algorithm="bilinear", shift=(0, 1), fraction=0.2)
-    corrected = _nearest(host.rgb, WARP)
+def _corrected_and_pasted(seed: int, warp: RadialResampling) -> tuple[np.ndarray, np.ndarray]:
+    """A photo corrected by ``warp``, and the same with a piece of another mosaic pasted in after the correction."""
+    host, donor = synth.make_pair(seed, SIZE, algorithm="bilinear", shift=(0, 1), fraction=0.2)
+    corrected = _nearest(host.rgb, warp)
     pasted = corrected.copy()
     pasted[PASTE] = donor.rgb[PASTE]
     return corrected, pasted
+
+
+@pytest.fixture(scope="module")
+def photos():
+    return _corrected_and_pasted(7, WARP)
 
 
 def _jpeg_grid_finding(details: dict) -> DetectorFinding:
@@ -129,11 +134,7 @@ UNZOOMED = RadialResampling(12.0, 0.0)
 
 @pytest.fixture(scope="module")
 def unzoomed():
-    host, donor = synth.make_pair(11, SIZE, algorithm="bilinear", shift=(0, 1), fraction=0.2)
-    corrected = _nearest(host.rgb, UNZOOMED)
-    pasted = corrected.copy()
-    pasted[PASTE] = donor.rgb[PASTE]
-    return corrected, pasted
+    return _corrected_and_pasted(11, UNZOOMED)
 
 
 def test_without_jpeg_grids_warp_the_mosaic_itself_shows_a_one_term_correction(unzoomed):
