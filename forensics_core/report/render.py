@@ -399,7 +399,8 @@ def _lr_summary(verdict, detectors) -> dict[str, Any] | None:
         "threshold": f"{WEAK_SUPPORT_LR:g}",
         "uncalibrated": ", ".join(lr.uncalibrated),
         "experimental": ", ".join(lr.experimental),
-        "min_auc": f"{cal.get('min_fusion_auc', 0.6):g}",
+        # Only calibrations that name experimental detectors state the bar (a calibration file made before has none).
+        "min_auc": "" if cal.get("min_fusion_auc") is None else f"{cal['min_fusion_auc']:g}",
         "relevance": lr.relevance,
         "performance": (f"Cross-validated on that data ({cal.get('cross_validation')}), the fused LR's cost Cllr is "
                         f"{cllr:.2f} (0 for perfect evidence, 1 for none){_by_record(cal)}." if cllr is not None
