@@ -57,7 +57,7 @@ validate-lens-splices: $(if $(wildcard $(REAL)),bytecode)
 # Splices from another camera's photo, copy-moves and removals with
 # object-like outlines, forged from the same building photos into
 # $(OUT)/validation-realistic/cases beside controls saved the same way (360
-# photos, about 90 min on 2 cores). Its record (no photo) is shipped and
+# photos, about 20 min on 2 cores). Its record (no photo) is shipped and
 # calibrated on beside the real one. No corpus, nothing to build.
 validate-realistic: $(if $(wildcard $(REAL)),bytecode)
 	@if [ ! -d "$(REAL)" ]; then echo "the real corpus is absent ($(REAL)): no forgeries built"; exit 0; fi; \

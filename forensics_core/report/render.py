@@ -32,8 +32,8 @@ from ..findings import ExifSummary, Findings, Status, Verdict
 from ..fusion import LR_POLICY
 from ..plugins import PluginHost, localise_map
 from ..text import visible
-from ..validation.record import SHIPPED_REALISTIC, ValidationRecord, shipped_record
 from ..validation.null_check import VERDICT
+from ..validation.record import SHIPPED_REALISTIC, ValidationRecord, shipped_record
 from . import images, wording
 from .error_rates import ErrorRates, given_error_rates, shipped_error_rates
 from .tables import csv_bytes
@@ -259,7 +259,8 @@ def _where(findings: Findings, evidence: Evidence, host: PluginHost | None) -> d
     data = images.where_figure(evidence.pixels, masks)
     return {"src": images.data_url(data, "image/jpeg"), "flagged": flagged,
             "colours": {findings.detectors[i].name: i % len(images.WHERE_COLOURS) for i, _ in masks},
-            "validated": _where_validated(flagged)}
+            # The shipped record is read only when the caption states it: for a photo with something outlined.
+            "validated": _where_validated(flagged) if flagged else ""}
 
 
 def _where_validated(flagged: list[str]) -> str:

@@ -92,7 +92,7 @@ class SuiteSize:
 
     The default, 60 (360 photos), is the shipped record's size, on which
     the calibrators are fitted beside the real sets; it validates in about
-    90 min on 2 cores.
+    20 min on 2 cores (18 min measured, 2026-12-07).
     """
 
     per_kind: int = 60
