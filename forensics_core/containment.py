@@ -69,7 +69,7 @@ def signals_held() -> Iterator[None]:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
-def _die_with_parent(parent: int) -> None:
+def die_with_parent(parent: int) -> None:
     """Have the kernel end this child when the process that forked it ends (Linux; elsewhere nothing).
 
     A parent killed outright (SIGKILL, the out-of-memory killer) cannot end
@@ -87,7 +87,7 @@ def _die_with_parent(parent: int) -> None:
 
 
 def _child(call: Callable[[], Any], conn, sink: int, parent: int) -> None:
-    _die_with_parent(parent)
+    die_with_parent(parent)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, HELD_SIGNALS)
     # A crash of the detector is reported in its finding; an inherited fault
     # handler would also dump the interpreter's state onto the user's terminal.

@@ -19,6 +19,7 @@ from .output import Placement, publish, staging_folder, write_findings
 from .plugins import PluginHost, one_line
 
 if TYPE_CHECKING:
+    from .report.layout_process import LayoutProcess
     from .report.render import ReportOptions
     from .signing import ExaminerKey
 
@@ -69,8 +70,10 @@ def expected_files(report: ReportSettings | None) -> set[str]:
 
 
 def write_report(findings: Findings, evidence: Evidence, folder: Path, host: PluginHost,
-                 report: ReportSettings) -> list[str]:
+                 report: ReportSettings, layout: LayoutProcess | None = None) -> list[str]:
     """Write the signed report bundle beside ``findings.json``; return the URLs the PDF renderer refused.
+
+    ``layout`` lays out the PDF, warm (:func:`started_layout`); without it the PDF is laid out here.
 
     Raises
     ------
@@ -83,7 +86,8 @@ def write_report(findings: Findings, evidence: Evidence, folder: Path, host: Plu
 
     try:
         result = write_bundle(findings, evidence, folder, report.key, formats=report.formats, host=host,
-                              options=report.options, organisation=report.organisation, tsa_url=report.tsa_url)
+                              options=report.options, organisation=report.organisation, tsa_url=report.tsa_url,
+                              layout=layout)
     except OSError:
         raise
     except Exception as exc:  # rendering or signing failed for this photo; the others go on
@@ -91,6 +95,18 @@ def write_report(findings: Findings, evidence: Evidence, folder: Path, host: Plu
             raise
         raise ReportError(one_line(exc)) from None
     return list(result.refused_urls)
+
+
+def started_layout(report: ReportSettings | None) -> LayoutProcess | None:
+    """The process that will lay out the PDF, started now so that it is warm when the report is ready.
+
+    None when no PDF is asked for or the platform cannot fork (the PDF is then laid out in this process).
+    """
+    if report is None or "pdf" not in report.formats:
+        return None
+    from .report.layout_process import started
+
+    return started()
 
 
 def _changed_since(photo: Path, sha256: str) -> str | None:
@@ -134,6 +150,7 @@ def examine_photo(photo: Path, place: Callable[[Evidence, Findings], Placement],
     ReportError
         When the report cannot be made.
     """
+    layout = started_layout(report)
     evidence = load_evidence(photo, max_pixels=options.max_pixels)
     findings = analyze_evidence(evidence, host, options)
     findings.evidence.changed_during_analysis = _changed_since(photo, evidence.info.sha256)
@@ -147,7 +164,7 @@ def examine_photo(photo: Path, place: Callable[[Evidence, Findings], Placement],
     with staging_folder(placement.folder) as staging:
         try:
             write_findings(findings, staging)
-            refused = write_report(findings, evidence, staging, host, report) if report is not None else []
+            refused = write_report(findings, evidence, staging, host, report, layout) if report is not None else []
             stopping.check()
             placement = publish(staging, placement, lambda: place(evidence, findings))
         except BaseException:

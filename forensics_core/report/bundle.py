@@ -26,6 +26,7 @@ from ..atomic import write_atomic
 from ..plugins import PluginHost
 from ..signing import UNNAMED_EXAMINER, ExaminerKey, sign_detached, sign_pdf
 from ..text import visible
+from .layout_process import LayoutProcess
 from .render import ReportOptions, SignatureInfo, render_html, render_pdf
 
 REPORT_FORMATS = ("html", "pdf")
@@ -65,7 +66,7 @@ def signature_info(key: ExaminerKey, examiner: str | None, organisation: str | N
 def write_bundle(findings: Findings, evidence: Evidence, folder: Path, key: ExaminerKey, *,
                  formats: Collection[str] = REPORT_FORMATS, host: PluginHost | None = None,
                  options: ReportOptions | None = None, organisation: str | None = None,
-                 tsa_url: str | None = None) -> BundleResult:
+                 tsa_url: str | None = None, layout: LayoutProcess | None = None) -> BundleResult:
     """Render, sign and write the report bundle into ``folder`` (which holds ``findings.json``).
 
     Parameters
@@ -85,6 +86,8 @@ def write_bundle(findings: Findings, evidence: Evidence, folder: Path, key: Exam
         Printed in the signature block; default the certificate's organisation.
     tsa_url : str, optional
         RFC 3161 time-stamping service for both signatures.
+    layout : LayoutProcess, optional
+        Lays out the PDF (:mod:`.layout_process`); without it the PDF is laid out here.
     """
     options = options or ReportOptions()
     report_date = options.report_date or _utc(datetime.now(timezone.utc))
@@ -106,7 +109,7 @@ def write_bundle(findings: Findings, evidence: Evidence, folder: Path, key: Exam
     if "html" in formats:
         put(HTML_NAME, report.html.encode("utf-8"))
     if "pdf" in formats:
-        pdf = render_pdf(report)
+        pdf = render_pdf(report, layout)
         location = organisation or key.organisation
         put(PDF_NAME, sign_pdf(pdf, key, reason="Forensic examination report; no changes permitted",
                                location=location, tsa_url=tsa_url))

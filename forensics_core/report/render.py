@@ -12,14 +12,13 @@ from __future__ import annotations
 import base64
 import hashlib
 import json
-import logging
 import shlex
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
-from importlib.resources import as_file, files
+from importlib.resources import files
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from jinja2 import Environment, FunctionLoader, StrictUndefined
 from markupsafe import Markup
@@ -38,6 +37,9 @@ from . import images, wording
 from .error_rates import ErrorRates, given_error_rates, shipped_error_rates
 from .tables import csv_bytes
 from .plugin_sections import DetectorSection, sections_for
+
+if TYPE_CHECKING:
+    from .layout_process import LayoutProcess
 
 TEMPLATES_PACKAGE = "forensics_core.templates"
 METADATA_CSV = "metadata.csv"
@@ -516,23 +518,16 @@ def _metadata_groups(tags) -> list[tuple[str, list]]:
     return list(groups.items())
 
 
-def render_pdf(report: RenderedReport) -> bytes:
-    """Lay out the report's HTML as a PDF (print media) with the safe fetcher.
+def render_pdf(report: RenderedReport, layout: LayoutProcess | None = None) -> bytes:
+    """The report's PDF, laid out by ``layout`` (a warm process of its own) or else here.
 
-    Refused URLs are added to ``report.refused_urls``. WeasyPrint's own
-    messages are kept out of the user's terminal.
+    Refused URLs are added to ``report.refused_urls``.
     """
-    from .fetcher import SafeFetcher
-    from .weasy import weasyprint
+    if layout is not None:
+        pdf, refused = layout.lay_out(report.html)
+    else:
+        from .pdf import lay_out
 
-    with as_file(files(TEMPLATES_PACKAGE)) as assets:
-        fetcher = SafeFetcher(Path(assets))
-        logger = logging.getLogger("weasyprint")
-        previous = logger.propagate
-        logger.propagate = False
-        try:
-            pdf = weasyprint.HTML(string=report.html, url_fetcher=fetcher, media_type="print").write_pdf()
-        finally:
-            logger.propagate = previous
-    report.refused_urls.extend(fetcher.refused)
+        pdf, refused = lay_out(report.html)
+    report.refused_urls.extend(refused)
     return pdf
