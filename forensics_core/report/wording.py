@@ -151,6 +151,13 @@ def statement(verdict: Verdict) -> Statement:
     elub = lr.calibration.get("elub_fused")
     bounds = (f"Its calibration data support likelihood ratios from {_ratio(elub[0])} to {_ratio(elub[1])} "
               f"(ELUB bounds)." if elub else None)
+    own = sorted(lr.calibration.get("own_calibration") or {})
+    if bounds and own:
+        # Their LR is multiplied into the fused one, so the statement may lie outside the fused bounds.
+        bounds = (f"Its calibration data support likelihood ratios from {_ratio(elub[0])} to {_ratio(elub[1])} "
+                  f"(ELUB bounds) for the detectors fused; the likelihood ratio of {', '.join(own)}, calibrated on "
+                  f"{'its' if len(own) == 1 else 'their'} own data within {'its' if len(own) == 1 else 'their'} own "
+                  f"bounds, is multiplied into it, so the statement may lie beyond that range.")
     return Statement(sentence, lr.verbal, lr_text(lr.log10_lr), side, bounds)
 
 

@@ -73,6 +73,18 @@ def test_strength_is_the_likelihood_ratio_never_a_graded_p_value():
     assert all("p-value" not in step.condition for step in wording.scale())
 
 
+def test_the_statement_names_the_fused_bounds_and_a_detector_calibrated_on_its_own_data_beyond_them():
+    v = bonferroni([finding("a", p=0.5)])
+    v.likelihood_ratio = LikelihoodRatio(hp="h", hd="d", log10_lr=2.0, verbal=verbal(2.0),
+                                         calibration={"elub_fused": [-0.5, 1.5]})
+    assert wording.statement(v).bounds == "Its calibration data support likelihood ratios from 1/3.16 to 31.6 (ELUB bounds)."
+    v.likelihood_ratio.calibration["own_calibration"] = {"prnu": {"source": "reference photos"}}
+    bounds = wording.statement(v).bounds
+    assert bounds.startswith("Its calibration data support likelihood ratios from 1/3.16 to 31.6 (ELUB bounds) for the "
+                             "detectors fused; the likelihood ratio of prnu, calibrated on its own data")
+    assert bounds.endswith("so the statement may lie beyond that range.")
+
+
 def test_the_fusion_policy_is_chosen_by_name(photo):
     findings = analyze(photo, host=fixture_host("good"), fusion="fisher", timeout=60)
     assert findings.verdict.policy == "fisher"
