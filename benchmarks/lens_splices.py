@@ -29,16 +29,17 @@ Then what the pasted lines actually do (issue 37, item 3):
 * per kind, the informative lines inside the mask against those outside
   it: the share departing by more than two standard errors (``|z| > 2``)
   and the median ``|z|``;
-* the departure a paste should cause, from the recipes and the lens each
-  photo shows untouched (its control's ``k1 ± stderr``): a line moved from
-  normalised distance ``d_s`` to ``d_d`` reads ``k1 d_s / d_d`` (paper
-  eqs. 1-5, to first order), so a piece from another camera departs by
-  ``k1_donor d_s / d_d - k1_host`` and a moved one by ``k1_host (d_s / d_d
-  - 1)`` (a rescaled one by ``k1_host (s d_s / d_d - 1)`` for scale ``s``);
-  the mean departure of the pasted lines is set beside it, and the cases
-  where it is measurable (``|predicted| > 2`` times its error and the
-  pasted lines' combined error) are counted, with how many of those hold
-  two directions and were called (p < 0.01).
+* what each pasted line should read, from the recipe and the lens its
+  source frame shows untouched (that photo's control's ``k1 +- stderr``):
+  a line at signed distance ``rho`` from the centre, along its normal,
+  bows by ``k1 rho s^2`` (paper eqs. 1-5, to first order), so copied with
+  its pixels it reads ``k1_source (rho_s / rho_d) (R_d / R_s)^2 / c``
+  (:func:`reading_ratio`; a line moved across the centre reads the
+  opposite sign). Printed: the lines' ``|z|`` against that prediction and
+  against the host's lens, the correlation of predicted and read
+  departures, and the pieces whose mean predicted departure is measurable
+  (more than twice its error and the pasted lines' combined error), with
+  how many of those hold two directions and were called (p < 0.01).
 
 Then whether the pasted lines, taken together, read another lens than the
 rest of the photo (the region against the rest, issue 37 item 3): each set
@@ -295,38 +296,80 @@ def print_pasted_lines(records: list[dict[str, Any]], recipes: dict[str, dict[st
                       f"{np.median(z):.2f}")
     lens = {r["host"]: (r["k1"], r["k1_stderr"]) for r in records
             if r["kind"] == "control" and r["status"] == "ok" and r["k1"] is not None}
-    print("\nthe departure a paste should cause (from the controls' k1) against the pasted lines' mean departure")
+    print("\nwhat each pasted line should read (its source's lens, paper eqs. 1-5 with signed distances) against what it "
+          "reads;\nz of the line's k1 against that prediction, and against the host's lens (no paste)")
     for kind in KINDS[:3]:
-        rows = []
+        lines, cases_ = [], []
         for r in records:
             recipe = recipes.get(r["file"])
-            pasted = [d for d in r.get("departures", []) if d["in_mask"] and d.get("delta_k1_stderr")]
-            if r["kind"] != kind or r["status"] != "ok" or recipe is None or r["host"] not in lens or not pasted:
+            if r["kind"] != kind or r["status"] != "ok" or recipe is None or r["host"] not in lens:
                 continue
-            distance = recipe["distance_from_centre"]
-            ratio = distance["source"] / max(distance["destination"], 1e-3)
+            source = r["donor"] if kind == "other_camera" else r["host"]
+            if source not in lens:
+                continue
             host, host_se = lens[r["host"]]
-            if kind == "other_camera":
-                if r["donor"] not in lens:
-                    continue
-                donor, donor_se = lens[r["donor"]]
-                predicted, predicted_se = donor * ratio - host, float(np.hypot(donor_se * ratio, host_se))
-            else:
-                factor = ratio * (recipe.get("scale") or 1.0) - 1.0
-                predicted, predicted_se = host * factor, abs(host_se * factor)
-            w = np.array([d["delta_k1_stderr"] for d in pasted]) ** -2.0
-            observed = float(np.sum(w * [d["delta_k1"] for d in pasted]) / w.sum())
-            rows.append((predicted, predicted_se, observed, float(w.sum() ** -0.5), r))
-        if len(rows) < 2:
+            src, src_se = lens[source]
+            pasted = [ln for ln in r.get("lines", []) if ln["in_masks"] and ln["in_masks"][0]]
+            if not pasted:
+                continue
+            ratio = np.array([reading_ratio(ln, recipe, r["shape"]) for ln in pasted])
+            read = np.array([ln["k1"] for ln in pasted])
+            se = np.array([ln["k1_stderr"] for ln in pasted])
+            z_paste = (read - src * ratio) / np.hypot(se, src_se * ratio)
+            z_host = (read - host) / np.hypot(se, host_se)
+            lines.append(np.column_stack((z_paste, z_host, src * ratio - host, read - host)))
+            w = se**-2.0
+            mean_pred = float(w @ (src * ratio - host) / w.sum())
+            pred_se = float(np.hypot(np.sqrt(w @ (src_se * ratio) ** 2) / np.sqrt(w.sum()) if w.sum() else 0, host_se))
+            cases_.append((abs(mean_pred) > 2.0 * max(pred_se, float(w.sum() ** -0.5)), r))
+        if not lines:
             continue
-        predicted = np.array([x[0] for x in rows])
-        observed = np.array([x[2] for x in rows])
-        measurable = [x for x in rows if abs(x[0]) > 2.0 * max(x[1], x[3])]
-        both = [x for x in measurable if x[4]["two_directions"] == "yes"]
-        called = [x for x in both if x[4]["p_value"] is not None and x[4]["p_value"] < P_CALLED]
-        print(f"  {kind:13s} n {len(rows):3d}  |predicted| median {np.median(np.abs(predicted)):.3f}  pasted lines' "
-              f"error median {np.median([x[3] for x in rows]):.3f}  correlation {np.corrcoef(predicted, observed)[0, 1]:+.2f}"
-              f"  measurable {len(measurable)}, of them in two directions {len(both)}, called {len(called)}")
+        a = np.vstack(lines)
+        measurable = [r for m, r in cases_ if m]
+        both = [r for r in measurable if r["two_directions"] == "yes"]
+        called = [r for r in both if r["p_value"] is not None and r["p_value"] < P_CALLED]
+        print(f"  {kind:13s} {len(a):4d} lines of {len(cases_)} pieces: |z| median {np.median(np.abs(a[:, 0])):.2f} against the "
+              f"prediction, {np.median(np.abs(a[:, 1])):.2f} against the host; within 2: {np.mean(np.abs(a[:, 0]) < 2):.0%} and "
+              f"{np.mean(np.abs(a[:, 1]) < 2):.0%}; correlation of predicted and read departures "
+              f"{np.corrcoef(a[:, 2], a[:, 3])[0, 1]:+.2f}; pieces whose mean predicted departure is measurable "
+              f"{len(measurable)}, of them in two directions {len(both)}, called {len(called)}")
+
+
+def reading_ratio(line: dict[str, Any], recipe: dict[str, Any], shape: list[int]) -> float:
+    """What a pasted line reads, as a multiple of its source frame's ``k1``.
+
+    A line at signed distance ``rho`` from the centre (along its normal) is
+    displaced by ``k1 rho s^2`` at abscissa ``s`` beyond what a straight line
+    absorbs (normalised units; paper eqs. 1-5 to first order). Copied with
+    its pixels, scaled by ``c``, from a frame of half-size ``R_s`` to one of
+    half-size ``R_d``, it reads ``k1_source (rho_s / rho_d) (R_d / R_s)^2 / c``.
+    The sign matters: a line moved across the centre reads the opposite sign.
+
+    Parameters
+    ----------
+    line : dict
+        A record's line: ``mid_px`` (x, y) in the exported photo and ``direction`` (radians).
+    recipe : dict
+        The case's recipe: ``source`` and ``destination`` boxes (x, y, w, h), ``scale``, the host's
+        ``size``, the donor's ``resized_to`` and the export's ``size`` (all (w, h) pixels).
+    shape : list of int
+        The exported photo's (H, W).
+
+    Returns
+    -------
+    float
+    """
+    host_w, host_h = recipe["host"]["size"]
+    export_w, export_h = recipe["export"]["size"]
+    mid = (np.asarray(line["mid_px"], dtype=float) + 0.5) * [host_w / export_w, host_h / export_h] - 0.5
+    normal = np.array([-np.sin(line["direction"]), np.cos(line["direction"])])
+    c = recipe.get("scale") or 1.0
+    frame = recipe["donor"]["resized_to"] if recipe.get("donor") else [host_w, host_h]
+    source_mid = (mid - recipe["destination"][:2]) / c + recipe["source"][:2]
+    rho_d = normal @ (mid - [(host_w - 1) / 2, (host_h - 1) / 2])
+    rho_s = normal @ (source_mid - [(frame[0] - 1) / 2, (frame[1] - 1) / 2])
+    rho_d = rho_d if abs(rho_d) > 1e-6 else 1e-6
+    return float(rho_s / rho_d * (max(host_w, host_h) / max(frame)) ** 2 / c)
 
 
 def random_effects_mean(k1: np.ndarray, stderr: np.ndarray) -> tuple[float, float, float]:
