@@ -56,6 +56,15 @@ of the two means over its combined error.
   radius of a long line's midpoint, in two directions), its 90th and 95th
   percentiles over the controls, and the share of each kind above them.
 
+Last, the most a known piece could give (:func:`best_case_evidence`): its
+lines fitted by one lens about a displaced centre (three parameters, fitted
+to the piece itself, so optimistic), weighed against the detector's null
+with its own error model, the smaller of the two direction families' sums
+as the region test requires; per kind the median, 75th percentile and
+largest, and the share above the largest of the controls' (the same masks
+over the untouched hosts). If this stays small, no region test can speak
+on these pieces, however it searches.
+
 ``--out`` saves every case's record (status, p-value, evidence, the region,
 informative lines, the global k1, which lines lie in the mask, the time
 ``analyse`` took). ``--module`` names another copy of the plugin, a package
@@ -182,8 +191,8 @@ def run_one(job: tuple[str, Path, dict[str, str]]) -> dict[str, Any]:
     region = details.get("region")
     model = details.get("global_model") or {}
     if not row["mask"]:
-        record["departures"] = [{"z": ln["z"], "in_mask": False} for ln in lines
-                                if ln.get("informative") and ln.get("z") is not None]
+        record["departures"] = [{"z": ln["z"], "delta_k1": ln["delta_k1"], "delta_k1_stderr": ln["delta_k1_stderr"],
+                                 "in_mask": False} for ln in lines if ln.get("informative") and ln.get("z") is not None]
     record.update({
         "host": row.get("host"), "donor": row.get("donor"),
         "status": result.status.value, "p_value": result.p_value, "evidence": details.get("evidence"),
@@ -462,6 +471,94 @@ def print_region_against_rest(records: list[dict[str, Any]]) -> None:
         print(f"  piece unknown best region |z| above the controls' {q:.0%} point ({threshold:.1f}): {shares}")
 
 
+def best_case_evidence(record: dict[str, Any], inside: np.ndarray, module: str) -> float | None:
+    """The most evidence a known piece's lines can give for a paste, with the region test's own error model.
+
+    The piece's informative lines are grouped into structures as the
+    region test groups them (``regions.structures``) and split into two
+    direction families (``regions.FAMILY_DEG``). The alternative is the
+    widest the paper allows: the piece follows one lens about a displaced
+    centre, so a structure at signed distance ``rho`` with unit normal ``n``
+    reads ``a + b . n / rho`` (``a`` the lens's ``k1``, ``b`` its centre's
+    displacement times ``-a``; eqs. 1-5 to first order), fitted by weighted
+    least squares to the piece itself, so the figure is optimistic. Each
+    structure's log-likelihood ratio is that fit's Gaussian (its standard
+    error and 10 % of the reading) against the null's Student t
+    (``error_model.DOF``) of its departure from the photo's lens as the
+    detector states it (``departures``); the smaller of the two
+    families' sums is returned, as the region test requires both to carry
+    the evidence. None when the piece holds fewer than four structures or
+    one family only.
+
+    Parameters
+    ----------
+    record : dict
+        A record of :func:`run_one` (its ``lines``, ``departures``, ``k1`` and ``shape``).
+    inside : ndarray of bool, shape (n_lines,)
+        Which of the record's lines lie in the piece.
+    module : str
+        The plugin package whose ``regions`` and ``error_model`` are used.
+
+    Returns
+    -------
+    float or None
+        Natural-log likelihood ratio.
+    """
+    regions = importlib.import_module(f"{module}.regions")
+    dof = importlib.import_module(f"{module}.error_model").DOF
+    kept = [(ln, d) for ln, d, keep in zip(record["lines"], record["departures"], inside) if keep]
+    if len(kept) < 4 or record.get("k1") is None:
+        return None
+    lines = [ln for ln, _ in kept]
+    h, w = record["shape"]
+    scale = max(h, w) / 2.0
+    mid = (np.array([ln["mid_px"] for ln in lines]) - [(w - 1) / 2.0, (h - 1) / 2.0]) / scale
+    direction = np.array([ln["direction"] for ln in lines])
+    # Departures from the photo's lens as the detector states them (k2 and the centre included), and what the
+    # lines read about the image centre with the photo's k1 added back.
+    departure = np.array([d["delta_k1"] for _, d in kept])
+    se = np.array([d["delta_k1_stderr"] for _, d in kept])
+    reading = record["k1"] + departure
+    groups = regions.structures(mid, direction, np.arange(len(lines)))
+    if len(groups) < 4:
+        return None
+    rep = np.array([g[np.argmin(se[g])] for g in groups])
+    y = np.array([se[g] ** -2.0 @ reading[g] / np.sum(se[g] ** -2.0) for g in groups])
+    s = se[rep]
+    turn = np.abs((direction[rep] - direction[rep[0]] + np.pi / 2) % np.pi - np.pi / 2)
+    family = turn < np.radians(regions.FAMILY_DEG)
+    if family.all() or not family.any():
+        return None
+    normal = np.column_stack((-np.sin(direction[rep]), np.cos(direction[rep])))
+    rho = np.einsum("ij,ij->i", mid[rep], normal)
+    rho = np.where(np.abs(rho) < 1e-3, np.copysign(1e-3, rho), rho)
+    design = np.column_stack((np.ones(len(rep)), normal / rho[:, None]))
+    beta = np.linalg.lstsq(design / s[:, None], y / s, rcond=None)[0]
+    fitted = design @ beta
+    delta = np.array([se[g] ** -2.0 @ departure[g] / np.sum(se[g] ** -2.0) for g in groups])
+    llr = (regions._log_normal(y - fitted, np.hypot(s, 0.1 * fitted)) - regions._log_t(delta, s, dof))
+    return float(min(llr[family].sum(), llr[~family].sum()))
+
+
+def print_best_case(records: list[dict[str, Any]], module: str) -> None:
+    """Print, per kind, the evidence known pieces could give at best (:func:`best_case_evidence`).
+
+    For a control, the pieces are its host's splices' masks over the untouched photo.
+    """
+    ok = [r for r in records if r["status"] == "ok" and r.get("lines")]
+    values = {kind: [x for r in ok if r["kind"] == kind for i in range(len(r["lines"][0]["in_masks"]))
+                     if (x := best_case_evidence(r, np.array([ln["in_masks"][i] for ln in r["lines"]]), module))
+                     is not None] for kind in KINDS}
+    print("\nat best, with the piece known: its lines fitted by one lens about a displaced centre, the smaller "
+          "of its two direction families' log-likelihood ratios against the photo's lens")
+    top = max(values["control"], default=np.nan)
+    for kind, v in values.items():
+        if v:
+            print(f"  {kind:13s} {len(v):3d} pieces in two directions: median {np.median(v):5.1f}, 75 % "
+                  f"{np.quantile(v, 0.75):5.1f}, largest {max(v):5.1f}; above the controls' largest: "
+                  f"{np.mean(np.array(v) > top):.0%}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--suite", type=Path, default=DEFAULT_SUITE)
@@ -496,6 +593,7 @@ def main() -> None:
         recipes = {c["file"]: c for c in json.loads(recipes_file.read_text())["cases"]}
         print_pasted_lines(records, recipes)
     print_region_against_rest(records)
+    print_best_case(records, args.module)
     if args.out is not None:
         args.out.write_text(json.dumps({"suite": str(args.suite), "module": args.module,
                                         "module_file": spec.__file__, "version": getattr(spec, "VERSION", None),
