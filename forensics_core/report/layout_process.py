@@ -124,11 +124,19 @@ _shared_lock = threading.Lock()
 
 
 def started() -> LayoutProcess | None:
-    """This process's layout process, started now if there is none running; None where ``fork`` is unavailable."""
+    """This process's layout process, started now if there is none running.
+
+    None where it cannot be started (no ``fork``; a daemonic process, such as a
+    Dask worker running detectors inline, may have no children; no resources):
+    the PDF is then laid out in this process, as before.
+    """
     global _shared
     if not can_fork():
         return None
     with _shared_lock:
         if _shared is None or not _shared.alive():
-            _shared = LayoutProcess()
+            try:
+                _shared = LayoutProcess()
+            except (AssertionError, OSError):
+                _shared = None
         return _shared

@@ -45,3 +45,11 @@ def test_a_layout_past_its_time_limit_is_given_up():
     with pytest.raises(LayoutError, match="took longer than 0.001 s"):
         process.lay_out("<p>x</p>" * 2000, timeout_s=0.001)
     assert not process.alive()
+
+
+def test_where_no_layout_process_can_start_the_pdf_is_laid_out_here(monkeypatch):
+    import multiprocessing
+
+    monkeypatch.setattr(layout_process, "_shared", None)
+    monkeypatch.setattr(multiprocessing.current_process(), "daemon", True)  # as a Dask worker's process is
+    assert layout_process.started() is None
