@@ -77,8 +77,9 @@ try:  # a baseline tree from before the layout process lays out the PDF in the c
     from forensics_core.report.layout_process import started
 except ImportError:
     started = None
-if started is not None:
-    fields = open(f"/proc/{started().pid}/stat").read().rsplit(")", 1)[1].split()
+layout = started() if started is not None else None
+if layout is not None:
+    fields = open(f"/proc/{layout.pid}/stat").read().rsplit(")", 1)[1].split()
     layout_cpu = (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
     stages["layout process"] = {"wall": 0.0, "cpu": 0.0, "children_cpu": layout_cpu}
     stages["whole command"]["children_cpu"] += layout_cpu

@@ -1,16 +1,18 @@
 """The PDF's layout in a process of its own, started before the detectors run.
 
-Importing WeasyPrint and its first layout (fontconfig, Pango's font map,
-the fonts read from disk) cost about 0.6 s of one core before the report's
-own pages are laid out. The detectors seldom keep every core busy, so a
-layout process forked when a photo's analysis starts spends that time while
-they run, and the report, once its HTML is made, is laid out warm. The
-process is kept for the photos that follow (``batch``), and started again if
-it ended.
+Importing WeasyPrint and its first layout (fontconfig, Pango's font map, the
+fonts read from disk) cost about 0.5 s before the report's own pages are laid
+out (the bundled camera photo's PDF: 1.67 s laid out cold in the command,
+1.13 s warm; benchmarks/report_stages.py). The detectors seldom keep every
+core busy, so a layout process forked when a photo's analysis starts spends
+that time while they run, and the report, once its HTML is made, is laid out
+warm. The process is kept for the photos that follow (``batch``), and started
+again if it ended.
 
-The analysing process never imports WeasyPrint itself: the detectors it
+With it, the analysing process never imports WeasyPrint: the detectors it
 forks do not inherit Pango's state, and a crash in the layout costs that
-photo's report, not the run.
+photo's report, not the run. Where it cannot be started, the PDF is laid out
+in the analysing process, as before.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from typing import Any
 from ..containment import can_fork, die_with_parent, one_line, signals_held
 
 LAYOUT_TIMEOUT_S = 600.0
-"""A report that takes longer than this to lay out is given up (the longest measured: 9 s, 100 MP)."""
+"""A report that takes longer than this to lay out is given up: a hung layout must not hold the run for ever."""
 
 #: Loads the report's fonts (its stylesheet names these first) and sets up fontconfig and Pango.
 _WARM_UP = ('<html><body style="font-family: \'DejaVu Sans\'"><h1>Warm-up</h1><p>Text <b>bold</b> <i>italic</i> '
