@@ -11,7 +11,10 @@ calibrators fitted on every ``--fit`` photo. Per record and per set this
 prints, for manipulated photos (Hp), the share with LR >= 2 and >= 100 and
 the median; for authentic ones (Hd), the share with LR >= 2 and >= 100, the
 largest LR, and per fused detector the share whose own LR is 2 or more;
-and the cross-validated Cllr where both propositions are present.
+and the cross-validated Cllr where both propositions are present. Then what
+stops the LR short of 100 (:func:`_ceiling`): the ELUB bounds, the LR at
+which each fused detector's calibrator levels off, and the authentic photos
+whose own LR comes within a factor 10 of its upper bound.
 
 Records are read from the paths given (the shipped ones are in
 ``forensics_core/validation/``); no photo is read.
@@ -48,6 +51,34 @@ def _summary(label: str, y: np.ndarray, fused: np.ndarray, per: dict[str, np.nda
     return "".join(out)
 
 
+def _ceiling(cases, calibrators, fusion, per: dict[str, np.ndarray], members: list[str], y: np.ndarray) -> None:
+    """Print what stops the LR short of 100: each fused detector's largest LR and the authentic photos that reach
+    a tenth of it.
+
+    A four-parameter calibrator's LR levels off at
+    ``(c (1 + d) + 1 - c) / ((1 - c) d)`` (floor ``c``, ceiling ``d``:
+    :mod:`forensics_core.calibration.model`): the share ``d`` of authentic
+    photos its data show scoring as manipulated ones do bounds it, whatever
+    the score. Every LR is then clipped to its ELUB bounds.
+    """
+    print(f"\nwhat stops the LR short of 100: the fused LR's ELUB bounds 10^{fusion.lower:.2f} to 10^{fusion.upper:.2f}")
+    for d in members:
+        cal = calibrators[d]
+        if cal.ceiling > 0.0:
+            level = (cal.floor * (1.0 + cal.ceiling) + 1.0 - cal.floor) / ((1.0 - cal.floor) * cal.ceiling)
+            shape = (f"levels off at LR {level:.0f} (floor {cal.floor:.3f}, ceiling {cal.ceiling:.4f}: about "
+                     f"{cal.ceiling:.1%} of authentic photos score as manipulated ones do)")
+        else:
+            shape = "a line, unbounded"
+        print(f"  {d}: its calibrator {shape}; ELUB bounds 10^{cal.lower:.2f} to 10^{cal.upper:.2f}")
+        feature = "score" if cal.feature == "score" else "p"
+        near = sorted(((per[d][i], cases[i].name, (cases[i].scores if feature == "score" else cases[i].p_values)
+                        .get(d)) for i in np.flatnonzero(y == 0) if per[d][i] >= cal.upper - 1.0), reverse=True)
+        for llr, name, value in near:
+            shown = "" if value is None else f", {feature} {value:.3g}"
+            print(f"    authentic, LR {10 ** llr:.1f} (cross-validated){shown}: {name}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--fit", nargs="+", type=Path, required=True)
@@ -71,8 +102,10 @@ def main() -> None:
             ss = sel & (sets == s)
             print(_summary(f"  set {s}", y[ss], fused[ss], {d: v[ss] for d, v in per.items()}, members))
 
+    calibrators, fusion = _fit_all(names, fit.cases, features, members)
+    _ceiling(fit.cases, calibrators, fusion, per, members, y)
+
     if args.apply:
-        calibrators, fusion = _fit_all(names, fit.cases, features, members)
         held = read_records(args.apply)
         llrs = {d: np.array([c.llr(calibrators[d]) for c in held.cases]) for d in names}
         hfused = np.array([fusion.log10_lr({d: llrs[d][i] for d in names}) for i in range(len(held.cases))])

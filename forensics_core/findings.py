@@ -80,10 +80,10 @@ class DetectorSpec:
         statistic (such a detector is advisory to the p-value triage rules).
     supports_hd : bool
         Whether the detector's findings can support Hd ("as the camera
-        produced it"); true by default. False for a detector that looks for
-        one kind of manipulation only, whose clean finding says nothing about
-        the others that Hp covers (a copy-move detector that finds no clone
-        says nothing about a splice): its calibrated LR is then never below 1.
+        produced it"); true by default. False for a detector whose clean
+        finding must not be weighed against the manipulations it cannot see
+        (one validated on its own kind of manipulation only, with no data on
+        the others Hp covers): its calibrated LR is then never below 1.
     uses_reference : bool
         Whether the detector compares the evidence with reference photos of
         the camera that allegedly took it (``forensics analyze --reference

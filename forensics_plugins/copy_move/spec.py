@@ -14,7 +14,7 @@ NAME = "copy_move"
 #: How a candidate copy was found (``found_by`` of each of the finding's hypotheses).
 KEYPOINTS = "keypoints"
 GRAIN = "grain autocorrelation"
-VERSION = "1.5.1"
+VERSION = "1.6.0"
 REFERENCES = (
     "I. Amerini, L. Ballan, R. Caldelli, A. Del Bimbo, G. Serra, A SIFT-based forensic method for copy-move attack "
     "detection and transformation recovery, IEEE Trans. Information Forensics and Security 6(3), 2011, "
@@ -61,6 +61,4 @@ SPEC = DetectorSpec(
     references=REFERENCES,
     default_params=DEFAULT_PARAMS,
     calibrated_on="score",
-    # A photo in which no copy is found may still hold a splice or a removal.
-    supports_hd=False,
 )

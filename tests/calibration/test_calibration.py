@@ -354,17 +354,20 @@ def test_a_one_sided_calibrator_never_supports_hd(tmp_path):
     assert one.log10_lr(None, 0.8) == pytest.approx(two.log10_lr(None, 0.8))
 
 
-def test_a_detector_of_one_kind_of_manipulation_is_calibrated_one_sided():
-    """copy_move declares supports_hd=False: the shipped calibrator never reads its findings as support for Hd."""
+def test_copy_move_finding_no_copy_is_weighed_as_its_lowest_score():
+    """copy_move scores a searched photo without a candidate 0 and is calibrated two-sided: finding no copy is
+    rarer under Hp than under Hd on the calibration data, and its shipped LR says so, within the ELUB bounds."""
     from forensics_core.calibration import load_shipped
     from forensics_core.calibration.fit import calibrator_inputs
     from forensics_core.plugins import PluginHost
 
     inputs = calibrator_inputs(PluginHost.from_entry_points())
-    assert inputs["copy_move"] == CalibratorInput("score", one_sided=True)
+    assert inputs["copy_move"] == CalibratorInput("score")
     assert inputs["dq"] == CalibratorInput("score") and "jpeg_grid" not in inputs
     shipped = load_shipped().calibrators["copy_move"]
-    assert shipped.lower == 0.0 and shipped.log10_lr(None, 0.0) == 0.0 and shipped.floor > 0.0
+    assert shipped.lower < 0.0 and shipped.floor > 0.0
+    assert shipped.lower <= shipped.log10_lr(None, 0.0) < 0.0
+    assert shipped.log10_lr(None, None) == 0.0  # a decline (inconclusive) still counts for neither side
 
 
 def _with_set_aucs(path, aucs, seed=None):

@@ -4,6 +4,7 @@ import io
 
 import cv2
 import numpy as np
+from scipy import ndimage
 import pytest
 from PIL import Image
 
@@ -27,7 +28,7 @@ def results():
 
 
 def _peak(result):
-    """The best candidate's grain peak; 0 when no candidate copy could be compared (no score, LR 1)."""
+    """The best candidate's grain peak; 0 when no candidate copy could be compared (score 0)."""
     return result.details.get("grain_peak") or 0.0
 
 
@@ -71,6 +72,14 @@ def test_identical_design_with_independent_grain_is_not_a_copy():
     img = scene(rng, (600, 800))
     r = analyse(_luma(encode(img, 92)), DEFAULT_PARAMS)
     assert _peak(r) < 0.1
+
+
+def test_a_searched_photo_without_a_candidate_scores_zero():
+    """No candidate at all is the lowest score, not a decline: the calibrated LR weighs it like a peak of 0."""
+    rng = np.random.default_rng(3)
+    texture = ndimage.gaussian_filter(rng.random((400, 600)), 1.5)
+    r = analyse((texture - texture.min()) / np.ptp(texture), DEFAULT_PARAMS)
+    assert r.status is Status.OK and r.details["best"] is None and r.score == 0.0, r.summary
 
 
 def test_a_flat_photo_is_inconclusive_not_clean():
