@@ -39,7 +39,10 @@ Then what the pasted lines actually do (issue 37, item 3):
   against the host's lens, the correlation of predicted and read
   departures, and the pieces whose mean predicted departure is measurable
   (more than twice its error and the pasted lines' combined error), with
-  how many of those hold two directions and were called (p < 0.01).
+  how many of those hold two directions and were called (p < 0.01). Those
+  pieces, of the other-camera and moved kinds, are the ones issue 37's
+  splice target counts; each is listed with the most its lines could give
+  with the piece known (:func:`best_case_evidence`, as a likelihood ratio).
 
 Then whether the pasted lines, taken together, read another lens than the
 rest of the photo (the region against the rest, issue 37 item 3): each set
@@ -86,6 +89,7 @@ import argparse
 import csv
 import importlib
 import json
+import math
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -285,7 +289,7 @@ def print_summary(records: list[dict[str, Any]]) -> None:
         print(f"  {r['file']}: {r['status']}")
 
 
-def print_pasted_lines(records: list[dict[str, Any]], recipes: dict[str, dict[str, Any]]) -> None:
+def print_pasted_lines(records: list[dict[str, Any]], recipes: dict[str, dict[str, Any]], module: str) -> None:
     """Print what the pasted lines do: their departures, and the departure the paste should cause.
 
     Parameters
@@ -342,6 +346,11 @@ def print_pasted_lines(records: list[dict[str, Any]], recipes: dict[str, dict[st
               f"{np.mean(np.abs(a[:, 1]) < 2):.0%}; correlation of predicted and read departures "
               f"{np.corrcoef(a[:, 2], a[:, 3])[0, 1]:+.2f}; pieces whose mean predicted departure is measurable "
               f"{len(measurable)}, of them in two directions {len(both)}, called {len(called)}")
+        # Issue 37's splice target counts exactly these pieces (cross-camera and moved): what could they give at best?
+        for r in both:
+            best = best_case_evidence(r, np.array([ln["in_masks"][0] for ln in r["lines"]]), module)
+            shown = "fewer than four structures or one family" if best is None else f"LR {math.exp(best):.1f}"
+            print(f"      {r['file']}: p {r['p_value']:.2g}; at best, with the piece known: {shown}")
 
 
 def reading_ratio(line: dict[str, Any], recipe: dict[str, Any], shape: list[int]) -> float:
@@ -591,7 +600,7 @@ def main() -> None:
     recipes_file = args.suite / "recipes.json"
     if recipes_file.exists():
         recipes = {c["file"]: c for c in json.loads(recipes_file.read_text())["cases"]}
-        print_pasted_lines(records, recipes)
+        print_pasted_lines(records, recipes, args.module)
     print_region_against_rest(records)
     print_best_case(records, args.module)
     if args.out is not None:
