@@ -97,9 +97,43 @@ def _attribution(job: tuple[str, dict[str, str]]) -> list[tuple[str, str, float,
     return out
 
 
-def _local(job: tuple[str, str | None, int, int, int, str, str]) -> dict:
-    """One manipulation case: host, donor (None: untouched), side, position, save and fingerprint file, scored."""
-    host, donor, side, y, x, save, fingerprint = job
+def manipulation_jobs(natural: list[Path], fingerprints: dict[str, str]) -> list[tuple]:
+    """The manipulation cases, drawn from :data:`SEED`: per natural photo, untouched twice and two pastes of each size.
+
+    Parameters
+    ----------
+    natural : list of Path
+        The natural photos, sorted.
+    fingerprints : dict of str to str
+        Each unit's fingerprint file (``.npy``).
+
+    Returns
+    -------
+    list of tuple
+        ``(host, donor or None, side, y, x, save, fingerprint file)``: the
+        square of ``side`` pixels at row ``y``, column ``x`` comes from the
+        same place of a natural photo of another unit; ``save`` is
+        ``original`` (untouched, as the camera wrote it) or ``jpeg92``.
+    """
+    rng = np.random.default_rng(SEED)
+    jobs: list[tuple] = []
+    for host in natural:
+        shape = _pixels(host).shape
+        donors = [d for d in natural if _unit(d) != _unit(host) and _pixels(d).shape == shape]
+        fp = fingerprints[_unit(host)]
+        jobs += [(str(host), None, 0, 0, 0, save, fp) for save in ("original", "jpeg92")]
+        for side in SIZES:
+            for _ in range(2):
+                donor = donors[int(rng.integers(len(donors)))]
+                y = int(rng.integers(0, shape[0] - side))
+                x = int(rng.integers(0, shape[1] - side))
+                jobs.append((str(host), str(donor), side, y, x, "jpeg92", fp))
+    return jobs
+
+
+def case_pixels(job: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """A manipulation case's pixels, shape (H, W, 3) uint8, and its true mask, shape (H, W) bool."""
+    host, donor, side, y, x, save, _ = job
     pixels = _pixels(Path(host))
     mask = np.zeros(pixels.shape[:2], bool)
     if donor is not None:
@@ -108,6 +142,13 @@ def _local(job: tuple[str, str | None, int, int, int, str, str]) -> dict:
         mask[y:y + side, x:x + side] = True
     if save == "jpeg92":
         pixels = _jpeg(pixels)
+    return pixels, mask
+
+
+def _local(job: tuple[str, str | None, int, int, int, str, str]) -> dict:
+    """One manipulation case: host, donor (None: untouched), side, position, save and fingerprint file, scored."""
+    host, donor, side, y, x, save, fingerprint = job
+    pixels, mask = case_pixels(job)
     k = np.load(fingerprint)
     residual, intensity = test_residual(pixels)
     peak = best_alignment(intensity * residual, k)
@@ -196,24 +237,11 @@ def main(argv: list[str] | None = None) -> int:
         wanted = {str(p) for p in natural + others}
         rows = [r for r in rows if r[0] in wanted]
         scored.write_text(json.dumps(rows))
-        rng = np.random.default_rng(SEED)
-        jobs: list[tuple] = []
-        for host in natural:
-            shape = _pixels(host).shape
-            donors = [d for d in natural if _unit(d) != _unit(host) and _pixels(d).shape == shape]
-            fp = fps[_unit(host)]
-            jobs += [(str(host), None, 0, 0, 0, save, fp) for save in ("original", "jpeg92")]
-            for side in SIZES:
-                for _ in range(2):
-                    donor = donors[int(rng.integers(len(donors)))]
-                    y = int(rng.integers(0, shape[0] - side))
-                    x = int(rng.integers(0, shape[1] - side))
-                    jobs.append((str(host), str(donor), side, y, x, "jpeg92", fp))
         done = args.work / "manipulation.json"
         if done.is_file():
             cases = json.loads(done.read_text())
         else:
-            cases = list(pool.map(_local, jobs))
+            cases = list(pool.map(_local, manipulation_jobs(natural, fps)))
             done.write_text(json.dumps(cases))
 
     photos = np.array([Path(p).name for p, _, _, _ in rows])
