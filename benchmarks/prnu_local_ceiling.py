@@ -11,7 +11,7 @@ same seed): each natural photo untouched (as written, and re-saved at JPEG
 photo, saved at JPEG 92; each is tested with its own unit's fingerprint,
 estimated from that unit's ten flat-field photos.
 
-Each photo's block map is the detector's (:func:`forensics_plugins.prnu.local.local_map`,
+Each photo's block map is the detector's (:func:`forensics_plugins.prnu.calibrate.tested_case`:
 blocks of 256 px every 64 px). A block's standardised deficit is
 ``z = (rho_hat - rho) / sigma_1``: its predicted correlation less the
 measured one, over the spread the photo's blocks show about the prediction
@@ -56,14 +56,12 @@ from pathlib import Path
 
 import numpy as np
 
-from forensics_plugins.prnu.alignment import aligned, best_alignment
-from forensics_plugins.prnu.calibrate import SIZES, _fingerprint, _unit, case_pixels, manipulation_jobs
-from forensics_plugins.prnu.local import boxes, local_map, regions
-from forensics_plugins.prnu.residual import test_residual
+from forensics_plugins.prnu.calibrate import SIZES, _fingerprint, _unit, manipulation_jobs, tested_case
 from forensics_plugins.prnu.spec import DEFAULT_PARAMS
 
-STEP = 64
-BLOCK = 256
+# The detector's block and grid step (calibration tests the cases with them).
+BLOCK = DEFAULT_PARAMS["block"]
+STEP = BLOCK // 4
 
 
 def _deficit(local) -> tuple[np.ndarray, np.ndarray]:
@@ -106,22 +104,12 @@ def _inside(side: int, y: int, x: int, shape: tuple[int, int]) -> tuple[range, r
 
 def run_one(job: tuple) -> dict:
     """One case: the detector's own result, and the block statistics the ceiling needs."""
-    host, donor, side, _, _, save, fingerprint = job
-    pixels, mask = case_pixels(job)
-    residual, intensity = test_residual(pixels)
-    k = np.load(fingerprint)
-    peak = best_alignment(intensity * residual, k)
-    (turned_residual, turned_intensity), kk = aligned((residual, intensity), peak, k)
-    local = local_map(turned_residual, turned_intensity, kk, BLOCK, STEP)
-    flagged, _ = regions(local, DEFAULT_PARAMS["region_llr"])
-    found = np.zeros(mask.shape, bool)
-    for x0, y0, x1, y1 in boxes(flagged, local.block, local.step, peak.rotation, turned_residual.shape):
-        found[y0:y1, x0:x1] = True
-    tp = float((found & mask).sum())
-    f1 = 2 * tp / (found.sum() + mask.sum()) if (found.sum() + mask.sum()) else 1.0
+    host, donor, side, _, _, save, _ = job
+    case = tested_case(job)
+    local, peak, mask = case.local, case.peak, case.mask
     z, snr = _deficit(local)
     record = {"host": Path(host).name, "donor": Path(donor).name if donor else None, "side": side, "save": save,
-              "flagged": bool(found.any()), "f1": f1, "rotation": peak.rotation,
+              "flagged": bool(case.found.any()), "f1": case.f1, "rotation": peak.rotation,
               "anywhere": {str(n): float(np.nanmax(t)) if np.isfinite(t).any() else None
                            for n in (1, 2) if (t := _tiled(z, n)).size}}
     if donor is not None:

@@ -34,6 +34,7 @@ import json
 import math
 import sys
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -43,7 +44,7 @@ from scipy.stats import ks_2samp, norm, t
 from .alignment import aligned, best_alignment, single_test_z
 from .pce import Peak
 from .fingerprint import estimate
-from .local import boxes, local_map, regions
+from .local import LocalMap, boxes, local_map, regions
 from .residual import test_residual
 from .spec import DEFAULT_PARAMS, VERSION
 
@@ -145,11 +146,36 @@ def case_pixels(job: tuple) -> tuple[np.ndarray, np.ndarray]:
     return pixels, mask
 
 
-def _local(job: tuple[str, str | None, int, int, int, str, str]) -> dict:
-    """One manipulation case: host, donor (None: untouched), side, position, save and fingerprint file, scored."""
-    host, donor, side, y, x, save, fingerprint = job
+@dataclass(frozen=True)
+class LocalCase:
+    """A manipulation case tested as the detector tests a photo.
+
+    Attributes
+    ----------
+    local : LocalMap
+        The block map, on the photo's grid turned to the fingerprint's.
+    peak : Peak
+        The alignment found.
+    mask, found : ndarray of bool, shape (H, W)
+        The true pasted square and the flagged regions' boxes, on the stored grid.
+    score : float
+        The largest window log-likelihood ratio (the calibrated score).
+    f1 : float
+        Pixel F1 of ``found`` against ``mask`` (1 when both are empty).
+    """
+
+    local: LocalMap
+    peak: Peak
+    mask: np.ndarray
+    found: np.ndarray
+    score: float
+    f1: float
+
+
+def tested_case(job: tuple) -> LocalCase:
+    """Run the detector's global and local tests on one case of :func:`manipulation_jobs`."""
     pixels, mask = case_pixels(job)
-    k = np.load(fingerprint)
+    k = np.load(job[-1])
     residual, intensity = test_residual(pixels)
     peak = best_alignment(intensity * residual, k)
     (turned_residual, turned_intensity), kk = aligned((residual, intensity), peak, k)
@@ -161,9 +187,16 @@ def _local(job: tuple[str, str | None, int, int, int, str, str]) -> dict:
         found[y0:y1, x0:x1] = True
     tp = float((found & mask).sum())
     f1 = 2 * tp / (found.sum() + mask.sum()) if (found.sum() + mask.sum()) else 1.0
+    return LocalCase(local, peak, mask, found, best, f1)
+
+
+def _local(job: tuple[str, str | None, int, int, int, str, str]) -> dict:
+    """One manipulation case: host, donor (None: untouched), side, position, save and fingerprint file, scored."""
+    host, donor, side, y, x, save, _ = job
+    case = tested_case(job)
     return {"host": Path(host).name, "donor": Path(donor).name if donor else None, "side": side, "y": y, "x": x,
-            "save": save, "pce": peak.pce, "score": best, "flagged": bool(found.any()), "f1": f1,
-            "decidable": float(local.decidable.mean())}
+            "save": save, "pce": case.peak.pce, "score": case.score, "flagged": bool(case.found.any()),
+            "f1": case.f1, "decidable": float(case.local.decidable.mean())}
 
 
 def _lir():
