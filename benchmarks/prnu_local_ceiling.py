@@ -4,7 +4,9 @@ Usage: ``python benchmarks/prnu_local_ceiling.py --dresden DIR [--workers 2] [--
 
 ``DIR`` holds the test data of ``polimi-ispl/prnu-python`` (``ff-jpg/``: ten
 flat-field photos per unit; ``nat-jpg/``: natural photos), read where it lies
-and never copied; without it this says so and exits 0. The cases are
+and never copied; without it this says so and exits 0. Any folder laid out the
+same way serves (``UNIT_N_anything.JPG``, the unit being the first three
+fields, e.g. a folder of links to another camera set's references and photos). The cases are
 calibration's manipulation cases (:func:`forensics_plugins.prnu.calibrate.manipulation_jobs`,
 same seed): each natural photo untouched (as written, and re-saved at JPEG
 92) and with squares of 256, 384 and 512 px pasted from another unit's
