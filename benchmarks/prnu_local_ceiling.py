@@ -6,12 +6,12 @@ Usage: ``python benchmarks/prnu_local_ceiling.py --dresden DIR [--workers 2] [--
 flat-field photos per unit; ``nat-jpg/``: natural photos), read where it lies
 and never copied; without it this says so and exits 0. Any folder laid out the
 same way serves (``UNIT_N_anything.JPG``, the unit being the first three
-fields, e.g. a folder of links to another camera set's references and photos). The cases are
-calibration's manipulation cases (:func:`forensics_plugins.prnu.calibrate.manipulation_jobs`,
+fields; e.g. a folder of links to another camera set's references and
+photos). The cases are calibration's manipulation cases (:func:`forensics_plugins.prnu.calibrate.manipulation_jobs`,
 same seed): each natural photo untouched (as written, and re-saved at JPEG
 92) and with squares of 256, 384 and 512 px pasted from another unit's
 photo, saved at JPEG 92; each is tested with its own unit's fingerprint,
-estimated from that unit's ten flat-field photos.
+estimated from that unit's flat-field photos (ten in the Dresden data).
 
 Each photo's block map is the detector's (:func:`forensics_plugins.prnu.calibrate.tested_case`:
 blocks of 256 px every 64 px). A block's standardised deficit is
